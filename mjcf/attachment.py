@@ -1,0 +1,153 @@
+"""Attaching one model to another: attachment frames and the checks that guard them."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from mjcf import constants
+from mjcf.element import Element, RootElement
+from mjcf.namescope import NameScope
+
+_ATTACHABLE_TAGS = ("site", "body", "worldbody")
+_FRAME_CHILDREN = ("joint", "freejoint", "inertial")
+_SITE_POSE_ATTRIBUTES = ("pos", "quat", "axisangle", "xyaxes", "zaxis", "euler")
+
+
+class AttachmentFrame(Element):
+    """The body that carries an attached model, placed where the model was attached.
+
+    Its generated name is the attached model's scope prefix ('child/'); it accepts
+    `<joint>`, `<freejoint>` and `<inertial>` children (e.g. `frame.add('freejoint')` makes
+    the attached model free-floating) and pose attributes. Its contents in the generated
+    XML are the attached model's worldbody.
+    """
+
+    __slots__ = ("_attached",)
+
+    @property
+    def attached_model(self) -> RootElement:
+        return self._attached
+
+    def _allowed_children(self) -> dict:
+        children = self._spec.children
+        return {tag: children[tag] for tag in _FRAME_CHILDREN if tag in children}
+
+    def prefixed_identifier(self, prefix_root=None) -> str:
+        prefix = self._root._namescope.full_prefix(prefix_root)
+        return prefix + self._attached._namescope.name + constants.PREFIX_SEPARATOR
+
+    def _describe(self) -> str:
+        return f"<attachment frame of model {self._attached._namescope.name!r}>"
+
+    def _set_attribute(self, name: str, value) -> None:
+        if name in ("name", "childclass"):
+            raise AttributeError(
+                f"{self._describe()}: attribute {name!r} of an attachment frame is set by "
+                "the attached model and cannot be changed"
+            )
+        super()._set_attribute(name, value)
+
+    def _collect_children(self, namespace, exclude_attachments, found) -> None:
+        for child in self._children:
+            child._collect(namespace, exclude_attachments, found)
+        if not exclude_attachments:
+            world = self._attached._singleton_if_present(constants.WORLDBODY)
+            if world is not None:
+                world._collect_children(namespace, exclude_attachments, found)
+
+
+def attach(site_or_body: Element, model: RootElement) -> AttachmentFrame:
+    """Attaches `model` at `site_or_body` and returns the new attachment frame."""
+    where = site_or_body
+    if where._spec.name not in _ATTACHABLE_TAGS or isinstance(where, AttachmentFrame):
+        raise ValueError(
+            f"{where._describe()}: models can only be attached to a site, a body or the worldbody"
+        )
+    if where._removed:
+        raise RuntimeError(f"{where._describe()} has been removed from its model")
+    if not isinstance(model, RootElement):
+        raise TypeError(
+            f"{where._describe()}.attach: expected an mjcf.RootElement, got {type(model).__name__}"
+        )
+    parent_model = where._root
+    if model._frame is not None:
+        raise ValueError(
+            f"model {model._namescope.name!r} is already attached to model "
+            f"{model._frame._root._namescope.name!r}; detach it first or attach a copy "
+            "(copy.deepcopy)"
+        )
+    ancestor = parent_model
+    while ancestor is not None:
+        if ancestor is model:
+            raise ValueError(
+                f"model {model._namescope.name!r} cannot be attached to itself or to a "
+                "model attached below it"
+            )
+        ancestor = ancestor._frame._root if ancestor._frame is not None else None
+    name = model._namescope.name
+    if parent_model._attached_model(name) is not None:
+        raise ValueError(
+            f"duplicate identifier: a model named {name!r} is already attached to model "
+            f"{parent_model._namescope.name!r}; give the new model another name"
+        )
+    _check_global_options(parent_model.root_model, model)
+
+    body = where._parent if where._spec.name == "site" else where
+    frame = AttachmentFrame._create(body._spec.children["body"], body, parent_model)
+    frame._attached = model
+    if where._spec.name == "site":
+        for attribute in _SITE_POSE_ATTRIBUTES:
+            value = where._attributes.get(attribute)
+            if value is not None:
+                frame._set_attribute(attribute, value)
+    body._children.append(frame)
+    parent_model._frames.append(frame)
+    model._frame = frame
+    NameScope.naming_changed()
+    frame._changed()
+    return frame
+
+
+def global_options(model: RootElement) -> dict:
+    """Explicitly set global options of `model` and everything attached below it.
+
+    Returns (section path, attribute) -> value; the first model to set a value wins.
+    """
+    options: dict = {}
+    stack = [model]
+    while stack:
+        current = stack.pop(0)
+        for section in current._children:
+            if section._spec.name in constants.GLOBAL_OPTION_SECTIONS:
+                _collect_options(section, (section._spec.name,), options)
+        stack.extend(frame._attached for frame in current._frames)
+    return options
+
+
+def _collect_options(element: Element, path: tuple, options: dict) -> None:
+    skip = constants.ASSET_DIRECTORY_ATTRIBUTES if path == ("compiler",) else ()
+    for name, value in element._attributes.items():
+        if name not in skip:
+            options.setdefault((path, name), value)
+    for child in element._children:
+        _collect_options(child, path + (child._spec.name,), options)
+
+
+def _check_global_options(parent: RootElement, child: RootElement) -> None:
+    mine = global_options(parent)
+    for key, value in global_options(child).items():
+        if key not in mine:
+            continue
+        other = mine[key]
+        same = (
+            np.array_equal(other, value)
+            if isinstance(other, np.ndarray) or isinstance(value, np.ndarray)
+            else other == value
+        )
+        if not same:
+            path, name = key
+            raise ValueError(
+                f"cannot attach model {child._namescope.name!r} to model "
+                f"{parent._namescope.name!r}: global option <{'/'.join(path)}> {name!r} is "
+                f"{value!r} in the child but {other!r} in the parent"
+            )

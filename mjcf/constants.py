@@ -1,0 +1,40 @@
+"""Fixed names and separators shared by the mjcf modules."""
+
+PREFIX_SEPARATOR = "/"
+PREFIX_SEPARATOR_ESCAPE = "\\"
+
+# Separates the namespace from the identifier in debug messages.
+NAMESPACE_SEPARATOR = "@"
+
+# Attribute names with a special meaning.
+BASEPATH = "basepath"
+CHILDCLASS = "childclass"
+CLASS = "class"
+DCLASS = "dclass"
+NAME = "name"
+
+# Tags with a special meaning.
+ACTUATOR = "actuator"
+BODY = "body"
+DEFAULT = "default"
+MESH = "mesh"
+SITE = "site"
+SKIN = "skin"
+TENDON = "tendon"
+WORLDBODY = "worldbody"
+MUJOCO = "mujoco"
+
+# Namespace under which attachment frames are found by `find`.
+ATTACHMENT_FRAME = "attachment_frame"
+
+# Longest file name MuJoCo's virtual file system accepts.
+MAX_VFS_FILENAME_LENGTH = 98
+
+# Sections whose attributes are global options: two models can only be combined when they
+# agree on every option that both set explicitly.
+GLOBAL_OPTION_SECTIONS = ("compiler", "option", "size", "visual")
+
+# Compiler attributes that locate asset files on disk; they only matter while loading a
+# model, so they never conflict between models and are not written to generated XML (which
+# names every file asset by its virtual file system name).
+ASSET_DIRECTORY_ATTRIBUTES = ("meshdir", "texturedir", "assetdir")

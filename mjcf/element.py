@@ -1,0 +1,736 @@
+"""The MJCF object model: `Element`, the model root `RootElement`, and child-list views."""
+
+from __future__ import annotations
+
+import difflib
+import os
+
+from mjcf import attribute_types, constants, element_list, schema, scoped_lookup
+from mjcf.asset import Asset
+from mjcf.namescope import UNNAMED_MODEL, NameScope
+
+_SEP = constants.PREFIX_SEPARATOR
+# Sets a private slot without going through Element.__setattr__ (which handles XML attributes).
+_set_slot = object.__setattr__
+_ESCAPED_SEP = constants.PREFIX_SEPARATOR_ESCAPE + constants.PREFIX_SEPARATOR
+
+# Which compiler attribute names the directory of each file-bearing element's files.
+_ASSET_DIRECTORY = {
+    "mesh": "meshdir",
+    "skin": "meshdir",
+    "hfield": "meshdir",
+    "flexcomp": "meshdir",
+    "texture": "texturedir",
+}
+
+
+def _close_matches(word: str, candidates) -> str:
+    matches = difflib.get_close_matches(word, list(candidates), n=3, cutoff=0.6)
+    if not matches:
+        return ""
+    return " (did you mean " + " or ".join(repr(m) for m in matches) + "?)"
+
+
+class _UnknownAttributeError(AttributeError):
+    """AttributeError whose message (with close matches) is only built when shown.
+
+    `getattr(element, name, default)` and `hasattr` probe names often; building the
+    suggestions eagerly would make every probe slow.
+    """
+
+    def __init__(self, element, name: str):
+        super().__init__(name)
+        self.element = element
+        self.name = name
+
+    def __str__(self) -> str:
+        return self.element._unknown_message(self.name)
+
+
+def registry_namespace(spec: schema.ElementSpec) -> str | None:
+    """Namespace an element's identifier is registered under ('default' for classes)."""
+    if spec.identifier == "class":
+        return constants.DEFAULT
+    return spec.namespace
+
+
+class Element:
+    """One element of an MJCF model, e.g. a `<body>`, `<geom>` or `<motor>`.
+
+    Elements are created by `parent.add(tag, **attributes)` (or by parsing XML), never
+    directly. XML attributes are Python attributes: `geom.size` is a NumPy array (None when
+    unset), `geom.size = [0.1]` validates and sets it, `geom.size = None` or `del geom.size`
+    unsets it; the XML `class` attribute is `dclass`. Children that may appear at most once
+    are attributes too (`body.inertial`, `root.worldbody`, created on first access);
+    repeated children are listed by tag (`body.geom[0]`, `body.geom['name']`).
+
+    Identifiers (`name`, and `class` of a default) are unique per namespace within a model.
+    Reference attributes (e.g. an actuator's `joint`) take an element or its identifier;
+    identifiers may be scoped into attached models ('arm/elbow').
+    """
+
+    __slots__ = (
+        "_spec",
+        "_parent",
+        "_root",
+        "_attributes",
+        "_texts",
+        "_children",
+        "_xml_cache",
+        "_auto_id",
+        "_removed",
+        "__weakref__",
+    )
+
+    def __init__(self, *args, **kwargs):
+        raise TypeError(
+            "mjcf.Element cannot be created directly: use parent.add(tag, ...) or "
+            "mjcf.RootElement()"
+        )
+
+    @classmethod
+    def _create(cls, spec: schema.ElementSpec, parent: Element | None, root: RootElement):
+        element = object.__new__(cls)
+        _set_slot(element, "_spec", spec)
+        _set_slot(element, "_parent", parent)
+        _set_slot(element, "_root", root)
+        _set_slot(element, "_attributes", {})
+        _set_slot(element, "_texts", {})
+        _set_slot(element, "_children", [])
+        _set_slot(element, "_xml_cache", None)
+        _set_slot(element, "_auto_id", None)
+        _set_slot(element, "_removed", False)
+        return element
+
+    # ----------------------------------------------------------------- basic properties
+
+    @property
+    def tag(self) -> str:
+        """The XML tag, e.g. 'geom'."""
+        return self._spec.name
+
+    @property
+    def spec(self) -> schema.ElementSpec:
+        """Schema of this element kind (`spec.namespace` is its MuJoCo object family)."""
+        return self._spec
+
+    @property
+    def parent(self) -> Element | None:
+        return self._parent
+
+    @property
+    def root(self) -> RootElement:
+        """The RootElement of the model this element belongs to."""
+        return self._root
+
+    @property
+    def namescope(self) -> NameScope:
+        return self._root._namescope
+
+    @property
+    def is_removed(self) -> bool:
+        return self._removed
+
+    @property
+    def full_identifier(self) -> str | None:
+        """Name of this element in the compiled model of the top of its attachment chain.
+
+        Unnamed elements that compile to a named MuJoCo object get a generated name (written
+        into the XML as well), so every such element can be found by name after compiling.
+        """
+        return self.prefixed_identifier(self._root.root_model)
+
+    def prefixed_identifier(self, prefix_root=None) -> str | None:
+        """This element's identifier as seen from model `prefix_root` (None: its own model)."""
+        spec = self._spec
+        if spec.identifier is None:
+            return None
+        prefix = self._root._namescope.full_prefix(prefix_root)
+        if spec.identifier == "class":
+            if self._parent is self._root:
+                return prefix or _SEP
+            return prefix + self._attributes["class"]
+        name = self._attributes.get("name")
+        if name is not None:
+            return prefix + name
+        return (prefix or _SEP) + self._unnamed_id()
+
+    def _unnamed_id(self) -> str:
+        if self._auto_id is None:
+            self._auto_id = self._root._namescope.next_unnamed(self._spec.namespace, self)
+        return self._auto_id
+
+    def _describe(self) -> str:
+        name = self._attributes.get(self._spec.identifier) if self._spec.identifier else None
+        if name is not None:
+            return f"<{self._spec.name} {self._spec.identifier}={name!r}>"
+        return f"<{self._spec.name}>"
+
+    def __repr__(self) -> str:
+        return f"MJCF Element: {self}"
+
+    def __str__(self) -> str:
+        """The opening tag with attributes; children are elided as '...'."""
+        from mjcf import xml_writer
+
+        return xml_writer.short_string(self)
+
+    # ------------------------------------------------------------------------ attributes
+
+    def __getattr__(self, name: str):
+        if name.startswith("_"):
+            raise AttributeError(name)
+        spec = self._spec
+        attribute = spec.python_attributes.get(name)
+        if attribute is not None:
+            return self._attributes.get(attribute.name)
+        child_spec = self._allowed_children().get(name)
+        if child_spec is not None:
+            if child_spec.repeated:
+                return element_list.ElementList(self, name)
+            return self._singleton(child_spec)
+        raise _UnknownAttributeError(self, name)
+
+    def __setattr__(self, name: str, value) -> None:
+        if name.startswith("_"):
+            object.__setattr__(self, name, value)
+            return
+        self._set_attribute(name, value)
+        self._changed()
+
+    def __delattr__(self, name: str) -> None:
+        if name.startswith("_"):
+            object.__delattr__(self, name)
+            return
+        self._set_attribute(name, None)
+        self._changed()
+
+    def __dir__(self):
+        names = set(super().__dir__())
+        names.update(self._spec.python_attributes)
+        names.update(self._allowed_children())
+        return sorted(names)
+
+    def _unknown_message(self, name: str) -> str:
+        known = list(self._spec.python_attributes) + list(self._allowed_children())
+        return f"{self._describe()} has no attribute or child {name!r}{_close_matches(name, known)}"
+
+    def get_attributes(self) -> dict:
+        """All set attributes, keyed by Python name (`dclass` for `class`)."""
+        attributes = self._spec.attributes
+        return {attributes[k].python_name: v for k, v in self._attributes.items()}
+
+    def set_attributes(self, **attributes) -> None:
+        """Sets several attributes at once; a value of None unsets that attribute."""
+        for name, value in attributes.items():
+            self._set_attribute(name, value)
+        self._changed()
+
+    def get_attribute_xml_string(self, attribute_name: str, prefix_root=None) -> str | None:
+        """The attribute's value as it is written to XML, or None when unset."""
+        spec = self._spec.python_attributes.get(attribute_name)
+        if spec is None:
+            raise AttributeError(self._unknown_message(attribute_name))
+        from mjcf import xml_writer
+
+        return xml_writer.attribute_string(self, spec, prefix_root)
+
+    def _set_attribute(self, name: str, value) -> None:
+        spec = self._spec.python_attributes.get(name)
+        if spec is None:
+            raise AttributeError(self._unknown_message(name))
+        if self._removed:
+            raise RuntimeError(f"{self._describe()} has been removed from its model")
+        xml_name = spec.name
+        kind = spec.type.kind
+        if value is None:
+            self._texts.pop(xml_name, None)
+            old = self._attributes.pop(xml_name, None)
+            if kind == attribute_types.IDENTIFIER and old is not None:
+                self._root._namescope.remove(registry_namespace(self._spec), old)
+            _set_slot(self, "_xml_cache", None)
+            return
+        try:
+            converted = spec.type.convert(value)
+        except ValueError as error:
+            raise ValueError(f"{self._describe()} attribute {name!r}: {error}") from None
+        if kind == attribute_types.IDENTIFIER:
+            self._set_identifier(xml_name, converted)
+            return
+        if kind == attribute_types.REFERENCE and not isinstance(converted, str):
+            self._check_reference_target(spec, converted)
+        elif kind == attribute_types.FILE and isinstance(converted, str):
+            converted = self._load_file(name, converted)
+        elif kind == attribute_types.STRING or kind == attribute_types.OTHER:
+            # Formatted now at full precision, so that writing XML only joins text.
+            self._texts[xml_name] = attribute_types.xml_text(xml_name, spec.type, converted)
+        self._attributes[xml_name] = converted
+        _set_slot(self, "_xml_cache", None)
+
+    def _set_identifier(self, xml_name: str, identifier: str) -> None:
+        if not identifier:
+            raise ValueError(f"{self._describe()} attribute {xml_name!r}: must not be empty")
+        if _SEP in identifier.replace(_ESCAPED_SEP, ""):
+            raise ValueError(
+                f"{self._describe()} attribute {xml_name!r}: {identifier!r} contains "
+                f"{_SEP!r}, which separates model scopes (parse with escape_separators=True "
+                "to keep such names)"
+            )
+        namespace = registry_namespace(self._spec)
+        old = self._attributes.get(xml_name)
+        if old == identifier:
+            return
+        scope = self._root._namescope
+        if namespace == constants.DEFAULT and self._parent is self._root:
+            self._attributes[xml_name] = identifier
+            return
+        if not self._removed and self._is_registered():
+            scope.add(namespace, identifier, self)
+            if old is not None:
+                scope.remove(namespace, old)
+        self._attributes[xml_name] = identifier
+        self._xml_cache = None
+
+    def _is_registered(self) -> bool:
+        """Whether this element is part of its model's tree (not under construction)."""
+        element = self
+        while element._parent is not None:
+            element = element._parent
+        return element is self._root
+
+    def _check_reference_target(self, spec, target: Element) -> None:
+        wanted = spec.type.namespace
+        if wanted is None:
+            return
+        if registry_namespace(target._spec) != wanted:
+            raise ValueError(
+                f"{self._describe()} attribute {spec.python_name!r}: expected a reference "
+                f"to a {wanted!r} element, got {target._describe()}"
+            )
+
+    def _load_file(self, name: str, path: str) -> Asset:
+        root = self._root
+        scope = root._namescope
+        directory = ""
+        compiler = root._singleton_if_present("compiler")
+        if compiler is not None:
+            directory = compiler._attributes.get(_ASSET_DIRECTORY.get(self._spec.name, "")) or ""
+            if not directory:
+                directory = compiler._attributes.get("assetdir") or ""
+        stem, extension = os.path.splitext(os.path.basename(path))
+        for key in (path, os.path.join(directory, path) if directory else None):
+            if key is not None and key in scope.assets:
+                return Asset(scope.assets[key], extension, stem)
+        full_path = path
+        if not os.path.isabs(full_path):
+            full_path = os.path.join(scope.model_dir, directory, path)
+        try:
+            with open(full_path, "rb") as handle:
+                contents = handle.read()
+        except OSError as error:
+            raise FileNotFoundError(
+                f"{self._describe()} attribute {name!r}: cannot read file {path!r} "
+                f"(looked for {full_path!r}: {error.strerror})"
+            ) from None
+        return Asset(contents, extension, stem)
+
+    # -------------------------------------------------------------------------- children
+
+    def _allowed_children(self) -> dict:
+        return self._spec.children
+
+    def _singleton_if_present(self, tag: str) -> Element | None:
+        for child in self._children:
+            if child._spec.name == tag:
+                return child
+        return None
+
+    def _singleton(self, child_spec: schema.ElementSpec) -> Element:
+        existing = self._singleton_if_present(child_spec.name)
+        if existing is not None:
+            return existing
+        child = Element._create(child_spec, self, self._root)
+        self._children.append(child)
+        return child
+
+    def add(self, element_name: str, **attributes) -> Element:
+        """Adds a child element with the given tag and attributes; returns it."""
+        return self.insert(element_name, len(self._children), **attributes)
+
+    def insert(self, element_name: str, position: int, **attributes) -> Element:
+        """Inserts a child element at `position` among this element's children."""
+        if self._removed:
+            raise RuntimeError(f"{self._describe()} has been removed from its model")
+        child_spec = self._allowed_children().get(element_name)
+        if child_spec is None:
+            raise ValueError(
+                f"{self._describe()} cannot have a child <{element_name}>"
+                f"{_close_matches(element_name, self._allowed_children())}; allowed: "
+                f"{', '.join(sorted(self._allowed_children()))}"
+            )
+        if not child_spec.repeated:
+            existing = self._singleton_if_present(element_name)
+            if existing is not None:
+                if existing._attributes or existing._children:
+                    raise ValueError(
+                        f"{self._describe()} already has a <{element_name}> child; access it "
+                        f"as .{element_name}"
+                    )
+                self._children.remove(existing)
+        child = Element._create(child_spec, None, self._root)
+        for name, value in attributes.items():
+            child._set_attribute(name, value)
+        child._parent = self
+        child._register_identifiers()
+        self._children.insert(position, child)
+        self._changed()
+        return child
+
+    def _identifier_entry(self) -> tuple[str, str] | None:
+        """(namespace, identifier) this element is registered under, or None."""
+        identifier_attr = self._spec.identifier
+        if identifier_attr is None:
+            return None
+        value = self._attributes.get(identifier_attr)
+        if value is None:
+            return None
+        namespace = registry_namespace(self._spec)
+        if namespace == constants.DEFAULT and self._parent is self._root:
+            return None
+        return namespace, value
+
+    def _register_identifiers(self) -> None:
+        """Registers identifiers of this subtree; on a clash, leaves nothing registered."""
+        done = []
+        try:
+            for element in self._iter_own_tree():
+                entry = element._identifier_entry()
+                if entry is not None:
+                    element._root._namescope.add(entry[0], entry[1], element)
+                    done.append((element, entry))
+        except ValueError:
+            for element, entry in done:
+                element._root._namescope.remove(*entry)
+            raise
+
+    def _iter_own_tree(self):
+        """Yields this element and its descendants in this model (not attached models)."""
+        stack = [self]
+        while stack:
+            element = stack.pop()
+            yield element
+            stack.extend(reversed(element._children))
+
+    def remove(self, affect_attachments: bool = False) -> None:
+        """Removes this element (and its subtree) from the model."""
+        del affect_attachments
+        parent = self._parent
+        if parent is None or self._removed:
+            raise ValueError(f"{self._describe()} is not part of a model, so cannot be removed")
+        for element in self._iter_own_tree():
+            entry = element._identifier_entry()
+            if entry is not None and element._root._namescope.get(*entry) is element:
+                element._root._namescope.remove(*entry)
+            if element._auto_id is not None:
+                element._root._namescope.remove_unnamed(element._spec.namespace, element._auto_id)
+            attached = getattr(element, "_attached", None)
+            if attached is not None:
+                element._root._frames.remove(element)
+                attached._frame = None
+            element._removed = True
+        NameScope.naming_changed()
+        parent._children.remove(self)
+        parent._changed()
+
+    def get_children(self, element_name: str):
+        """Children with the given tag: a list view for repeated tags, else the one child."""
+        child_spec = self._allowed_children().get(element_name)
+        if child_spec is None:
+            raise ValueError(
+                f"{self._describe()} has no child tag {element_name!r}"
+                f"{_close_matches(element_name, self._allowed_children())}"
+            )
+        if child_spec.repeated:
+            return element_list.ElementList(self, element_name)
+        return self._singleton(child_spec)
+
+    def all_children(self) -> list[Element]:
+        """All children in order (attachment frames included, attached models' elements not)."""
+        return list(self._children)
+
+    # ---------------------------------------------------------------------------- search
+
+    def find(self, namespace: str, identifier: str) -> Element | None:
+        """Finds the element named `identifier` in `namespace` in this element's subtree.
+
+        `identifier` may be scoped into attached models, e.g. 'arm/hand/pinch_site'.
+        Returns None when there is no such element.
+        """
+        if namespace == "keyframe":
+            namespace = "key"
+        found = scoped_lookup.lookup(self._root, namespace, identifier)
+        if found is None or self is self._root:
+            return found
+        ancestor = found
+        while ancestor is not None and ancestor is not self:
+            ancestor = ancestor._parent if ancestor._parent is not None else _frame_of(ancestor)
+        return found if ancestor is self else None
+
+    def enter_scope(self, scope_identifier: str) -> RootElement | None:
+        """The model attached below this element's model as `scope_identifier`, or None."""
+        model = self._root
+        for name in scope_identifier.split(_SEP):
+            if not name:
+                continue
+            model = model._attached_model(name)
+            if model is None:
+                return None
+        return model
+
+    def find_all(
+        self,
+        namespace: str,
+        immediate_children_only: bool = False,
+        exclude_attachments: bool = False,
+    ) -> list[Element]:
+        """All elements of `namespace` in this subtree, in model order.
+
+        Attached models are searched too unless `exclude_attachments`; attachment frames
+        count as bodies and are found under the 'attachment_frame' namespace.
+        """
+        if namespace == "keyframe":
+            namespace = "key"
+        found = []
+        if immediate_children_only:
+            for child in self._children:
+                if _matches(child, namespace):
+                    found.append(child)
+            return found
+        self._collect(namespace, exclude_attachments, found)
+        if self is self._root and not exclude_attachments:
+            self._collect_sections_of_attachments(namespace, found)
+        return found
+
+    def _collect(self, namespace, exclude_attachments, found) -> None:
+        if _matches(self, namespace):
+            found.append(self)
+        self._collect_children(namespace, exclude_attachments, found)
+
+    def _collect_children(self, namespace, exclude_attachments, found) -> None:
+        for child in self._children:
+            child._collect(namespace, exclude_attachments, found)
+
+    # --------------------------------------------------------------------- bookkeeping
+
+    def _changed(self) -> None:
+        _set_slot(self, "_xml_cache", None)
+        model = self._root
+        while model is not None:
+            model._modification_count += 1
+            frame = model._frame
+            model = frame._root if frame is not None else None
+
+    # ------------------------------------------------------------------------------ XML
+
+    def to_xml_string(
+        self,
+        prefix_root=None,
+        self_close: bool = True,
+        pretty_print: bool = True,
+        debug_context=None,
+        *,
+        precision: int = 17,
+        zero_threshold: float = 0,
+    ) -> str:
+        """XML text of this element (for a RootElement: a complete, compilable model)."""
+        del debug_context
+        from mjcf import xml_writer
+
+        return xml_writer.element_to_string(
+            self, prefix_root, self_close, pretty_print, precision, zero_threshold
+        )
+
+    def to_xml(self, prefix_root=None, debug_context=None, *, precision=17, zero_threshold=0):
+        """This element as an lxml element tree."""
+        from lxml import etree
+
+        text = self.to_xml_string(
+            prefix_root,
+            pretty_print=False,
+            debug_context=debug_context,
+            precision=precision,
+            zero_threshold=zero_threshold,
+        )
+        return etree.fromstring(text)
+
+    # ----------------------------------------------------------------------- attachment
+
+    def attach(self, attachment: RootElement):
+        """Attaches model `attachment` here (a site, body or worldbody); returns its frame."""
+        from mjcf import attachment as _attachment
+
+        return _attachment.attach(self, attachment)
+
+    def __copy__(self):
+        raise TypeError(
+            f"{self._describe()}: only whole models (RootElement) can be copied; use "
+            "copy.deepcopy(root) or copy.copy(root)"
+        )
+
+    def __deepcopy__(self, memo):
+        return self.__copy__()
+
+
+def _frame_of(element):
+    """The attachment frame that holds `element`'s model, when `element` is that model's root."""
+    if element is element._root:
+        return element._frame
+    return None
+
+
+def _matches(element: Element, namespace: str) -> bool:
+    if namespace == constants.ATTACHMENT_FRAME:
+        return getattr(element, "_attached", None) is not None
+    return registry_namespace(element._spec) == namespace and not (
+        namespace == constants.DEFAULT and element._parent is element._root
+    )
+
+
+class RootElement(Element):
+    """A whole MJCF model: the `<mujoco>` element.
+
+    Args:
+      model: the model name; it scopes every identifier of this model when the model is
+        attached to another ('model/identifier').
+      model_dir: directory that relative file paths of assets are resolved against.
+      assets: filename -> bytes; consulted before the disk when a file path is set.
+
+    Attributes beyond `Element`:
+      modification_count: an int that grows whenever anything in this model, or in any
+        model attached below it, changes. Reading it is O(1).
+    """
+
+    __slots__ = (
+        "_namescope",
+        "_frame",
+        "_frames",
+        "_modification_count",
+        "_xml_string_cache",
+        "_assets_cache",
+    )
+
+    def __init__(self, model: str | None = None, model_dir: str = "", assets: dict | None = None):
+        self._spec = schema.root_spec()
+        self._parent = None
+        self._root = self
+        self._attributes = {}
+        self._texts = {}
+        self._children = []
+        self._xml_cache = None
+        self._auto_id = None
+        self._removed = False
+        self._namescope = NameScope(self, model_dir, assets)
+        self._frame = None
+        self._frames = []
+        self._modification_count = 0
+        self._xml_string_cache = None
+        self._assets_cache = None
+        self.model = model or UNNAMED_MODEL
+        self._modification_count = 0
+
+    @property
+    def modification_count(self) -> int:
+        return self._modification_count
+
+    @property
+    def parent_model(self) -> RootElement | None:
+        """The model this one is attached to, or None."""
+        return self._frame._root if self._frame is not None else None
+
+    @property
+    def root_model(self) -> RootElement:
+        """The top of this model's attachment chain."""
+        model = self
+        while model._frame is not None:
+            model = model._frame._root
+        return model
+
+    def _set_attribute(self, name: str, value) -> None:
+        if name == "model" and value is None:
+            value = UNNAMED_MODEL
+        if name == "model":
+            if not isinstance(value, str) or not value:
+                raise ValueError(
+                    f"<mujoco> attribute 'model': expected a non-empty string, got {value!r}"
+                )
+            if _SEP in value:
+                raise ValueError(
+                    f"<mujoco> attribute 'model': {value!r} contains {_SEP!r}, which "
+                    "separates model scopes"
+                )
+            frame = self._frame
+            if frame is not None:
+                sibling = frame._root._attached_model(value)
+                if sibling is not None and sibling is not self:
+                    raise ValueError(
+                        f"duplicate identifier: a model named {value!r} is already attached "
+                        f"to model {frame._root._namescope.name!r}"
+                    )
+        super()._set_attribute(name, value)
+        if name == "model":
+            NameScope.naming_changed()
+
+    def _attached_model(self, name: str) -> RootElement | None:
+        for frame in self._frames:
+            if frame._attached._namescope.name == name:
+                return frame._attached
+        return None
+
+    def _collect_sections_of_attachments(self, namespace, found) -> None:
+        for frame in self._frames:
+            model = frame._attached
+            for section in model._children:
+                if section._spec.name != constants.WORLDBODY:
+                    section._collect_children(namespace, False, found)
+            model._collect_sections_of_attachments(namespace, found)
+
+    def attach(self, attachment: RootElement):
+        """Attaches model `attachment` to this model's worldbody; returns its frame."""
+        return self.worldbody.attach(attachment)
+
+    def detach(self) -> None:
+        """Detaches this model from the model it is attached to."""
+        frame = self._frame
+        if frame is None:
+            raise RuntimeError(
+                f"model {self._namescope.name!r} is not attached to any model, so cannot "
+                "be detached"
+            )
+        frame.remove()
+
+    def get_assets(self) -> dict[str, bytes]:
+        """Every file asset of this model and attached models: VFS filename -> contents."""
+        cache = self._assets_cache
+        if cache is None or cache[0] != self._modification_count:
+            from mjcf import xml_writer
+
+            cache = (self._modification_count, xml_writer.collect_assets(self))
+            self._assets_cache = cache
+        return dict(cache[1])
+
+    def to_spec(self):
+        """This model as a `mujoco.MjSpec` (compiled names equal `full_identifier`s)."""
+        import mujoco
+
+        return mujoco.MjSpec.from_string(self.to_xml_string(), assets=self.get_assets())
+
+    def remove(self, affect_attachments: bool = False) -> None:
+        raise ValueError("the <mujoco> root element cannot be removed; use detach()")
+
+    def __copy__(self):
+        return self.__deepcopy__({})
+
+    def __deepcopy__(self, memo):
+        from mjcf import copier
+
+        return copier.copy_model(self)

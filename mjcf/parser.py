@@ -1,0 +1,205 @@
+"""Builds the object model from MJCF XML: strings, files and paths, with `<include>`."""
+
+from __future__ import annotations
+
+import os
+
+from lxml import etree
+
+from mjcf import attribute_types, constants
+from mjcf.element import Element, RootElement, _close_matches
+from mjcf.scoped_lookup import lookup
+
+_INCLUDE = "include"
+_ESCAPED_SEP = constants.PREFIX_SEPARATOR_ESCAPE + constants.PREFIX_SEPARATOR
+
+
+def from_xml_string(
+    xml_string: str | bytes,
+    escape_separators: bool = False,
+    model_dir: str = "",
+    resolve_references: bool = True,
+    assets: dict | None = None,
+) -> RootElement:
+    """Parses MJCF text into a RootElement.
+
+    Args:
+      xml_string: the MJCF document.
+      escape_separators: accept identifiers containing '/' by escaping it as '\\/'.
+      model_dir: directory that `<include>` files and file assets are resolved against.
+      resolve_references: turn references written as identifiers into the elements they
+        name (references to missing elements stay strings and fail when written out).
+      assets: filename -> bytes, looked up before the disk for includes and file assets.
+    """
+    if isinstance(xml_string, str):
+        xml_string = xml_string.encode("utf-8")
+    parser = etree.XMLParser(remove_comments=True, remove_blank_text=True)
+    try:
+        document = etree.fromstring(xml_string, parser)
+    except etree.XMLSyntaxError as error:
+        raise ValueError(f"invalid MJCF XML: {error}") from None
+    return _build(document, escape_separators, model_dir, resolve_references, assets)
+
+
+def from_file(
+    file_handle,
+    escape_separators: bool = False,
+    model_dir: str = "",
+    resolve_references: bool = True,
+    assets: dict | None = None,
+) -> RootElement:
+    """Parses MJCF from an open file object (see `from_xml_string` for the arguments)."""
+    return from_xml_string(
+        file_handle.read(), escape_separators, model_dir, resolve_references, assets
+    )
+
+
+def from_path(
+    path: str,
+    escape_separators: bool = False,
+    resolve_references: bool = True,
+    assets: dict | None = None,
+) -> RootElement:
+    """Parses the MJCF file at `path`; relative includes and assets resolve next to it."""
+    with open(path, "rb") as handle:
+        text = handle.read()
+    return from_xml_string(
+        text, escape_separators, os.path.dirname(path), resolve_references, assets
+    )
+
+
+def _read_include(file_name: str, model_dir: str, assets: dict | None):
+    if assets and file_name in assets:
+        text = assets[file_name]
+    else:
+        path = file_name if os.path.isabs(file_name) else os.path.join(model_dir, file_name)
+        try:
+            with open(path, "rb") as handle:
+                text = handle.read()
+        except OSError as error:
+            raise FileNotFoundError(
+                f"<include file={file_name!r}>: cannot read {path!r} ({error.strerror})"
+            ) from None
+    if isinstance(text, str):
+        text = text.encode("utf-8")
+    parser = etree.XMLParser(remove_comments=True, remove_blank_text=True)
+    try:
+        return etree.fromstring(text, parser)
+    except etree.XMLSyntaxError as error:
+        raise ValueError(f"<include file={file_name!r}>: invalid XML: {error}") from None
+
+
+def _expand_includes(node, model_dir: str, assets, seen: tuple) -> None:
+    """Replaces every `<include>` below `node` by the children of the included file's root."""
+    for include in list(node.iter(_INCLUDE)):
+        file_name = include.get("file")
+        if file_name is None:
+            raise ValueError("<include> needs a 'file' attribute")
+        if file_name in seen:
+            raise ValueError(f"<include file={file_name!r}> includes itself")
+        included = _read_include(file_name, model_dir, assets)
+        _expand_includes(included, model_dir, assets, seen + (file_name,))
+        parent = include.getparent()
+        position = parent.index(include)
+        parent.remove(include)
+        for offset, child in enumerate(list(included)):
+            parent.insert(position + offset, child)
+
+
+def _build(document, escape_separators, model_dir, resolve_references, assets) -> RootElement:
+    if document.tag != constants.MUJOCO:
+        raise ValueError(
+            f"the root element of an MJCF model must be <mujoco>, got <{document.tag}>"
+        )
+    _expand_includes(document, model_dir, assets, ())
+    root = RootElement(model_dir=model_dir, assets=assets)
+    model_name = document.get("model")
+    for name in document.keys():
+        if name != "model":
+            raise ValueError(f"<mujoco> has no attribute {name!r}")
+    # Compiler settings decide where file assets live, so they are read first.
+    sections = sorted(document, key=lambda child: child.tag != "compiler")
+    for child in sections:
+        _add_element(root, child, escape_separators)
+    if model_name is not None:
+        root.model = model_name
+    if resolve_references:
+        _resolve_references(root)
+    root._modification_count = 0
+    return root
+
+
+def _add_element(parent: Element, node, escape_separators: bool) -> None:
+    tag = node.tag
+    if not isinstance(tag, str):
+        return
+    allowed = parent._allowed_children()
+    spec = allowed.get(tag)
+    if spec is None:
+        raise ValueError(
+            f"{parent._describe()} cannot have a child <{tag}>{_close_matches(tag, allowed)}"
+        )
+    if spec.repeated:
+        element = Element._create(spec, None, parent._root)
+        _set_attributes(element, node, escape_separators)
+        element._parent = parent
+        entry = element._identifier_entry()
+        if entry is not None:
+            element._root._namescope.add(entry[0], entry[1], element)
+        parent._children.append(element)
+    else:
+        element = parent._singleton(spec)
+        _set_attributes(element, node, escape_separators)
+        entry = element._identifier_entry()
+        if entry is not None:
+            element._root._namescope.add(entry[0], entry[1], element)
+    for child in node:
+        _add_element(element, child, escape_separators)
+
+
+def _set_attributes(element: Element, node, escape_separators: bool) -> None:
+    attributes = element._spec.attributes
+    for name, value in node.items():
+        spec = attributes.get(name)
+        if spec is None:
+            raise ValueError(
+                f"{element._describe()} has no attribute {name!r}{_close_matches(name, attributes)}"
+            )
+        kind = spec.type.kind
+        if escape_separators and kind in (attribute_types.IDENTIFIER, attribute_types.REFERENCE):
+            value = value.replace(constants.PREFIX_SEPARATOR, _ESCAPED_SEP)
+        if kind == attribute_types.IDENTIFIER:
+            element._attributes[name] = _checked_identifier(element, name, value)
+        else:
+            element._set_attribute(spec.python_name, value)
+
+
+def _checked_identifier(element: Element, name: str, value: str) -> str:
+    if not value:
+        raise ValueError(f"{element._describe()} attribute {name!r}: must not be empty")
+    if constants.PREFIX_SEPARATOR in value.replace(_ESCAPED_SEP, ""):
+        raise ValueError(
+            f"<{element._spec.name}> attribute {name!r}: {value!r} contains "
+            f"{constants.PREFIX_SEPARATOR!r}, which separates model scopes (parse with "
+            "escape_separators=True to keep such names)"
+        )
+    return value
+
+
+def _resolve_references(root: RootElement) -> None:
+    """Replaces identifier strings in reference attributes by the elements they name."""
+    for element in root._iter_own_tree():
+        attributes = element._spec.attributes
+        for name, value in list(element._attributes.items()):
+            if not isinstance(value, str):
+                continue
+            value_type = attributes[name].type
+            if value_type.kind != attribute_types.REFERENCE:
+                continue
+            namespace = value_type.target_namespace(element._attributes)
+            if namespace is None:
+                continue
+            target = lookup(root, namespace, value)
+            if target is not None:
+                element._attributes[name] = target
+                element._xml_cache = None

@@ -1,0 +1,71 @@
+"""Resolving identifiers that may be scoped into attached models ('arm/hand/site')."""
+
+from __future__ import annotations
+
+from typing import TYPE_CHECKING
+
+from mjcf import constants
+from mjcf.asset import Asset
+
+if TYPE_CHECKING:
+    from mjcf.element import Element, RootElement
+
+_SEP = constants.PREFIX_SEPARATOR
+
+# Asset kinds that MuJoCo lets you reference by file name when they have no name.
+_NAMED_BY_FILE = ("mesh", "texture", "hfield", "skin")
+
+
+def split_identifier(identifier: str) -> tuple[str, str | None]:
+    """Splits 'scope/rest' at the first unescaped separator; ('name', None) if there is none."""
+    start = 0
+    while True:
+        index = identifier.find(_SEP, start)
+        if index < 0:
+            return identifier, None
+        if index > 0 and identifier[index - 1] == constants.PREFIX_SEPARATOR_ESCAPE:
+            start = index + 1
+            continue
+        return identifier[:index], identifier[index + 1 :]
+
+
+def lookup(root: RootElement, namespace: str, identifier: str) -> Element | None:
+    """Resolves a possibly scoped identifier ('arm/hand/site', 'arm/', '//unnamed_geom_0')."""
+    while True:
+        head, rest = split_identifier(identifier)
+        if rest is None:
+            break
+        if not head:
+            # '//unnamed_x_0' at the top scope, 'scope//unnamed_x_0' below it.
+            unnamed = rest if rest.startswith(_SEP) else _SEP + rest
+            return root._namescope.get_unnamed(namespace, unnamed)
+        model = root._attached_model(head)
+        if model is None:
+            return None
+        if not rest and namespace in (constants.BODY, constants.ATTACHMENT_FRAME):
+            return model._frame
+        root = model
+        identifier = rest
+    if namespace == constants.ATTACHMENT_FRAME:
+        model = root._attached_model(identifier)
+        return model._frame if model is not None else None
+    if namespace == constants.DEFAULT and identifier == "main":
+        return root.default
+    found = root._namescope.get(namespace, identifier)
+    if found is None and namespace in _NAMED_BY_FILE:
+        found = _unnamed_asset_by_file(root, namespace, identifier)
+    return found
+
+
+def _unnamed_asset_by_file(root: RootElement, namespace: str, stem: str) -> Element | None:
+    """MuJoCo names an unnamed file asset after its file name without extension."""
+    section = root._singleton_if_present("asset")
+    if section is None:
+        return None
+    for child in section._children:
+        if child._spec.name != namespace or "name" in child._attributes:
+            continue
+        asset = child._attributes.get("file")
+        if isinstance(asset, Asset) and asset.prefix == stem:
+            return child
+    return None

@@ -1,0 +1,111 @@
+"""Generated XML: formatting options, scoping and compilability."""
+
+import mujoco
+import pytest
+
+import mjcf
+
+
+@pytest.fixture
+def model():
+    root = mjcf.RootElement(model="writer")
+    body = root.worldbody.add("body", name="b", pos=[0.1, 1e-12, 2])
+    body.add("geom", name="g", size=[1 / 3])
+    return root
+
+
+def test_precision_limits_significant_digits(model):
+    xml = model.to_xml_string(precision=3)
+    assert 'size="0.333"' in xml
+
+
+def test_full_precision_round_trips_floats_exactly(model):
+    root = mjcf.from_xml_string(model.to_xml_string(), escape_separators=True)
+    assert root.find("geom", "g").size[0] == 1 / 3
+
+
+def test_zero_threshold_writes_tiny_values_as_zero(model):
+    assert 'pos="0.1 0 2"' in model.to_xml_string(zero_threshold=1e-9)
+    assert "1e-12" in model.to_xml_string()
+
+
+def test_pretty_print_indents_and_compact_does_not(model):
+    pretty = model.to_xml_string()
+    compact = model.to_xml_string(pretty_print=False)
+    assert "\n    <body" in pretty
+    assert "\n" not in compact
+
+
+def test_self_close_false_writes_end_tags(model):
+    xml = model.find("geom", "g").to_xml_string(self_close=False)
+    assert xml == f'<geom name="g" size="{1 / 3!r}"></geom>'
+
+
+def test_every_class_taking_element_names_its_class(model):
+    xml = model.to_xml_string()
+    assert f'<geom name="g" size="{1 / 3!r}" class="/"/>' in xml
+    assert '<default class="/"/>' in xml
+
+
+def test_childclass_applies_to_descendants(model):
+    model.default.add("default", dclass="soft").geom.solref = [0.1, 1]
+    body = model.find("body", "b")
+    body.childclass = "soft"
+    inner = body.add("geom", name="inner", size=[0.1])
+    compiled = mujoco.MjModel.from_xml_string(model.to_xml_string())
+    assert compiled.geom("inner").solref[0] == pytest.approx(0.1)
+    assert compiled.geom("g").solref[0] == pytest.approx(0.1)
+    assert inner.dclass is None
+
+
+def test_to_xml_returns_an_lxml_element(model):
+    element = model.to_xml()
+    assert element.tag == "mujoco"
+    assert element.find("worldbody/body").get("name") == "b"
+
+
+def test_attribute_values_are_xml_escaped():
+    root = mjcf.RootElement()
+    root.custom.add("text", name="note", data='a "quoted" <tag> & more')
+    compiled = mujoco.MjModel.from_xml_string(root.to_xml_string())
+    start = compiled.text_adr[0]
+    text = bytes(compiled.text_data[start : start + compiled.text_size[0] - 1]).decode()
+    assert text == 'a "quoted" <tag> & more'
+
+
+def test_changes_after_a_write_appear_in_the_next_write(model):
+    first = model.to_xml_string()
+    model.find("geom", "g").name = "renamed"
+    second = model.to_xml_string()
+    assert first != second and 'name="renamed"' in second
+
+
+def test_prefix_root_scopes_names_relative_to_a_model():
+    parent = mjcf.RootElement(model="parent")
+    child = mjcf.RootElement(model="child")
+    geom = child.worldbody.add("geom", name="g", size=[1])
+    parent.attach(child)
+    assert geom.to_xml_string() == '<geom name="g" size="1"/>'
+    assert geom.to_xml_string(prefix_root=parent) == '<geom name="child/g" size="1"/>'
+    assert geom.prefixed_identifier(parent) == "child/g"
+    assert geom.prefixed_identifier() == "g"
+    assert geom.full_identifier == "child/g"
+
+
+def test_attached_model_written_alone_is_a_standalone_model():
+    parent = mjcf.RootElement(model="parent")
+    child = mjcf.RootElement(model="child")
+    child.worldbody.add("geom", name="g", size=[1])
+    parent.attach(child)
+    compiled = mujoco.MjModel.from_xml_string(child.to_xml_string())
+    assert compiled.geom("g").id == 0
+
+
+def test_unnamed_freejoint_without_attributes_is_written_and_compiles():
+    root = mjcf.RootElement(model="m")
+    body = root.worldbody.add("body")
+    body.add("freejoint")
+    body.add("geom", size=[0.1])
+    compiled = mujoco.MjModel.from_xml_string(root.to_xml_string(), root.get_assets())
+    assert compiled.njnt == 1
+    assert compiled.jnt_type[0] == mujoco.mjtJoint.mjJNT_FREE
