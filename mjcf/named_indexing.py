@@ -1,0 +1,184 @@
+"""``physics.named.model.<field>[name]`` and ``physics.named.data.<field>[name]``.
+
+Each MjModel/MjData array field gets a ``FieldIndexer`` on first access. Rows of fields that
+belong to an object family (``mjcf.field_layout``) are addressed by the objects' names in the
+compiled model: ``named.data.xpos['torso']``, ``named.model.geom_rgba[['a', 'b']]``,
+``named.data.qpos['free_joint']`` (7 values), ``named.data.sensordata['accelerometer']``.
+Integers, slices and arrays index rows directly, as in NumPy; a tuple key indexes rows then
+columns, and labelled columns accept names (``named.data.xpos['torso', 'z']``).
+"""
+
+import collections
+
+import numpy as np
+
+from mjcf import field_layout
+from mjcf.field_layout import ModelLayout
+
+NamedIndexStructs = collections.namedtuple("NamedIndexStructs", ["model", "data"])
+
+
+class _Rows:
+    """Converts row keys of one field: names to indices, everything else passed through."""
+
+    def __init__(self, layout: ModelLayout, family, rule, field: str):
+        self._layout = layout
+        self._family = family
+        self._rule = rule
+        self._field = field
+
+    def convert(self, key):
+        if isinstance(key, str):
+            return self._layout.single_index(self._rule, self._id(key))
+        if isinstance(key, (list, np.ndarray)) and len(key) and _is_name(key[0]):
+            return self._layout.multi_index(self._rule, [self._id(name) for name in key])
+        return key
+
+    def labels(self, length: int) -> list:
+        """The object name of each of ``length`` rows ('' where unknown)."""
+        labels = [""] * length
+        if self._family is None:
+            return labels
+        layout = self._layout
+        for object_id in range(layout.object_count(self._family)):
+            name = layout.object_name(self._family, object_id)
+            index = layout.single_index(self._rule, object_id)
+            if isinstance(index, slice):
+                for row in range(index.start, index.stop):
+                    labels[row] = name
+            else:
+                labels[index] = name
+        return labels
+
+    def _id(self, name) -> int:
+        family = self._family
+        if family is None:
+            raise KeyError(f"rows of {self._field!r} have no names; index it with integers")
+        object_id = self._layout.object_id(family, str(name))
+        if object_id < 0:
+            raise KeyError(
+                f"{self._field!r}: no {family.namespace} named {str(name)!r} in this model"
+            )
+        rule = self._rule
+        if rule is not None and rule.width == field_layout.AT_MOST_ONE:
+            if self._layout.owned_rows(rule, object_id) == 0:
+                raise KeyError(f"{self._field!r}: {family.namespace} {str(name)!r} has no row")
+        return object_id
+
+
+def _is_name(item) -> bool:
+    return isinstance(item, (str, np.str_))
+
+
+class FieldIndexer:
+    """One MuJoCo array field, indexable by object names as well as by integers.
+
+    Reading returns what NumPy indexing of the field returns (views for names of objects
+    with consecutive rows); assignment writes into MuJoCo's memory.
+    """
+
+    __slots__ = ("_struct", "_name", "_array", "_rows")
+
+    def __init__(self, struct, name: str, rows: _Rows, static: bool):
+        self._struct = struct
+        self._name = name
+        self._array = getattr(struct, name) if static else None
+        self._rows = rows
+
+    @property
+    def field(self) -> np.ndarray:
+        """The whole MuJoCo array."""
+        array = self._array
+        return getattr(self._struct, self._name) if array is None else array
+
+    def __getitem__(self, key):
+        return self.field[self._convert(key)]
+
+    def __setitem__(self, key, value):
+        self.field[self._convert(key)] = value
+
+    def __len__(self):
+        return len(self.field)
+
+    def __array__(self, dtype=None, copy=None):
+        return np.asarray(self.field, dtype=dtype)
+
+    def _convert(self, key):
+        if not isinstance(key, tuple):
+            return self._rows.convert(key)
+        array = self.field
+        if len(key) > array.ndim:
+            raise IndexError(
+                f"{self._name!r} has {array.ndim} dimension(s) but the key has {len(key)}: {key!r}"
+            )
+        converted = [self._rows.convert(key[0])]
+        for axis, item in enumerate(key[1:], start=1):
+            converted.append(self._convert_column(item, array.shape[axis], axis))
+        return tuple(converted)
+
+    def _convert_column(self, item, width: int, axis: int):
+        names = field_layout.column_names(self._name, width) if axis == 1 else None
+        if isinstance(item, str):
+            return self._column_index(item, names)
+        if isinstance(item, (list, tuple)) and item and isinstance(item[0], str):
+            return [self._column_index(label, names) for label in item]
+        return item
+
+    def _column_index(self, label: str, names) -> int:
+        if names is None or label not in names:
+            known = f"columns are {names}" if names else "its columns have no names"
+            raise KeyError(f"{self._name!r} has no column {label!r}; {known}")
+        return names.index(label)
+
+    def __repr__(self):
+        array = self.field
+        labels = self._rows.labels(len(array))
+        rows = array.reshape(len(array), int(np.prod(array.shape[1:])))
+        columns = field_layout.column_names(self._name, array.shape[1]) if array.ndim > 1 else None
+        name_width = max([len(label) for label in labels] + [0])
+        index_width = len(str(max(len(array) - 1, 0)))
+        lines = [f"FieldIndexer({self._name}):"]
+        if columns:
+            header = " ".join(f"{column:>10}" for column in columns)
+            lines.append(f"{'':{index_width + name_width + 4}}{header}")
+        for row, (label, values) in enumerate(zip(labels, rows)):
+            text = " ".join(f"{value:>10.4g}" for value in values)
+            lines.append(f"{row:>{index_width}} {label:>{name_width}} [ {text} ]")
+        return "\n".join(lines)
+
+
+class StructIndexer:
+    """Named access to every array field of an MjModel or MjData (``physics.named.data``)."""
+
+    def __init__(self, struct, kind: str, layout: ModelLayout):
+        self._struct = struct
+        self._kind = kind
+        self._layout = layout
+        self._extents = field_layout.STRUCT_EXTENTS[kind]
+
+    def __getattr__(self, name):
+        if name.startswith("_"):
+            raise AttributeError(name)
+        extents = self.__dict__["_extents"]
+        if name not in extents:
+            raise AttributeError(f"{self._kind} has no array field {name!r}")
+        family, rule = field_layout.ROW_OWNERS.get((self._kind, name), (None, None))
+        rows = _Rows(self._layout, family, rule, name)
+        static = self._kind == field_layout.MODEL or hasattr(self._layout.model, extents[name][0])
+        indexer = FieldIndexer(self._struct, name, rows, static)
+        self.__dict__[name] = indexer
+        return indexer
+
+    def __dir__(self):
+        return sorted(set(super().__dir__()) | set(self._extents))
+
+    def __repr__(self):
+        return f"StructIndexer({self._kind}: {len(self._extents)} fields)"
+
+
+def make_struct_indexers(model, data, layout: ModelLayout) -> NamedIndexStructs:
+    """``NamedIndexStructs(model=..., data=...)`` for raw ``mujoco`` model and data."""
+    return NamedIndexStructs(
+        model=StructIndexer(model, field_layout.MODEL, layout),
+        data=StructIndexer(data, field_layout.DATA, layout),
+    )

@@ -1,0 +1,100 @@
+"""Off-screen rendering for ``Physics.render``: one ``mujoco.Renderer`` per image size."""
+
+import mujoco
+import numpy as np
+
+_RENDER_FLAG_PREFIX = "mjRND_"
+
+
+def _render_flag(flag) -> int:
+    if isinstance(flag, str):
+        member = f"{_RENDER_FLAG_PREFIX}{flag.upper()}"
+        if member not in mujoco.mjtRndFlag.__members__:
+            known = sorted(
+                name[len(_RENDER_FLAG_PREFIX) :].lower()
+                for name in mujoco.mjtRndFlag.__members__
+                if name.startswith(_RENDER_FLAG_PREFIX)
+            )
+            raise ValueError(f"unknown render flag {flag!r}; expected one of {known}")
+        return int(mujoco.mjtRndFlag.__members__[member])
+    return int(flag)
+
+
+class Renderers:
+    """Renders one model's scenes, keeping a ``mujoco.Renderer`` per (height, width)."""
+
+    def __init__(self, model: mujoco.MjModel):
+        self._model = model
+        self._renderers = {}
+
+    def camera_id(self, camera_id) -> int:
+        """A camera index from a camera name or index; -1 is the free camera.
+
+        Raises:
+          ValueError: for an unknown name or an index outside [-1, ncam).
+        """
+        if isinstance(camera_id, str):
+            index = mujoco.mj_name2id(self._model, mujoco.mjtObj.mjOBJ_CAMERA, camera_id)
+            if index < 0:
+                raise ValueError(f"camera_id {camera_id!r}: the model has no camera of that name")
+            return index
+        index = int(camera_id)
+        if not -1 <= index < self._model.ncam:
+            raise ValueError(
+                f"camera_id {camera_id}: expected -1 (free camera) or a camera index below "
+                f"{self._model.ncam}"
+            )
+        return index
+
+    def render(
+        self,
+        data: mujoco.MjData,
+        height: int,
+        width: int,
+        camera_id,
+        depth: bool,
+        segmentation: bool,
+        scene_option,
+        render_flag_overrides,
+    ) -> np.ndarray:
+        """RGB (H, W, 3) uint8, depth (H, W) float32 in metres, or segmentation (H, W, 2).
+
+        Segmentation pixels hold (object id, ``mjtObj`` type); background is (-1, -1).
+        """
+        if depth and segmentation:
+            raise ValueError("depth and segmentation cannot both be requested")
+        if render_flag_overrides and (depth or segmentation):
+            raise ValueError("render_flag_overrides only apply to RGB images")
+        camera = self.camera_id(camera_id)
+        renderer = self._renderer(height, width)
+        renderer.update_scene(data, camera=camera, scene_option=scene_option)
+        if depth:
+            renderer.enable_depth_rendering()
+        elif segmentation:
+            renderer.enable_segmentation_rendering()
+        flags = renderer.scene.flags
+        saved_flags = flags.copy()
+        try:
+            for flag, value in (render_flag_overrides or {}).items():
+                flags[_render_flag(flag)] = bool(value)
+            return renderer.render()
+        finally:
+            flags[:] = saved_flags
+            if depth:
+                renderer.disable_depth_rendering()
+            elif segmentation:
+                renderer.disable_segmentation_rendering()
+
+    def close(self) -> None:
+        """Releases every renderer and its OpenGL context."""
+        for renderer in self._renderers.values():
+            renderer.close()
+        self._renderers.clear()
+
+    def _renderer(self, height: int, width: int) -> mujoco.Renderer:
+        key = (int(height), int(width))
+        renderer = self._renderers.get(key)
+        if renderer is None:
+            renderer = mujoco.Renderer(self._model, height=key[0], width=key[1])
+            self._renderers[key] = renderer
+        return renderer

@@ -1,0 +1,405 @@
+"""Tests for physics.bind on real mjcf models, including attached models."""
+
+import mujoco
+import numpy as np
+import pytest
+
+import mjcf
+from mjcf.physics import Physics
+
+
+class _Scene:
+    """A scene built with the mjcf API: a free ball, a two-link arm, and an attached robot."""
+
+    def __init__(self):
+        root = mjcf.RootElement(model="scene")
+        self.root = root
+        worldbody = root.worldbody
+        self.ball_body = worldbody.add("body", name="ball_body", pos=[0, 0, 1])
+        self.free = self.ball_body.add("freejoint", name="free")
+        self.ball = self.ball_body.add("geom", name="ball", size=[0.1], rgba=[1, 0, 0, 1])
+        self.ball_site = self.ball_body.add("site", name="ball_site")
+        self.arm = worldbody.add("body", name="arm", pos=[1, 0, 1])
+        self.hinge = self.arm.add(
+            "joint", name="hinge", type="hinge", axis=[0, 1, 0], range=[-45, 90], damping=0.25
+        )
+        self.upper = self.arm.add(
+            "geom", name="upper", type="capsule", fromto=[0, 0, 0, 0.3, 0, 0], size=[0.04]
+        )
+        self.forearm = self.arm.add("body", name="forearm", pos=[0.3, 0, 0])
+        self.ball_joint = self.forearm.add("joint", name="ball_joint", type="ball")
+        self.lower = self.forearm.add(
+            "geom", name="lower", type="capsule", fromto=[0, 0, 0, 0.3, 0, 0], size=[0.03]
+        )
+        self.tip = self.forearm.add("site", name="tip", pos=[0.3, 0, 0])
+        self.target = worldbody.add("body", name="target", mocap=True, pos=[0, 1, 1])
+        self.target.add("geom", name="target_geom", size=[0.05], contype=0, conaffinity=0)
+        self.motor = root.actuator.add("motor", name="motor", joint=self.hinge, gear=[2])
+        self.filtered = root.actuator.add(
+            "general", name="filtered", joint=self.hinge, dyntype="filter", dynprm=[0.1]
+        )
+        self.tip_pos = root.sensor.add("framepos", name="tip_pos", objtype="site", objname=self.tip)
+        self.hinge_pos = root.sensor.add("jointpos", name="hinge_pos", joint=self.hinge)
+        self.tendon = root.tendon.add("fixed", name="coupling")
+        self.tendon.add("joint", joint=self.hinge, coef=2)
+
+        robot = mjcf.RootElement(model="robot")
+        self.robot = robot
+        self.robot_base = robot.worldbody.add("body", name="base", pos=[0, 0, 0.5])
+        self.robot_geom = self.robot_base.add("geom", name="base_geom", size=[0.1])
+        self.robot_site = self.robot_base.add("site", name="sensor_site", pos=[0.1, 0.2, 0.3])
+        self.robot_joint = self.robot_base.add("joint", name="slide", type="slide")
+        self.frame = worldbody.attach(robot)
+        self.frame.pos = [2, 0, 0]
+        self.physics = Physics.from_mjcf_model(root)
+
+    def object_id(self, obj_type, name):
+        return mujoco.mj_name2id(self.physics.model.ptr, obj_type, name)
+
+
+@pytest.fixture
+def scene():
+    return _Scene()
+
+
+def test_single_geom_position_is_a_3_vector(scene):
+    xpos = scene.physics.bind(scene.ball).xpos
+    assert xpos.shape == (3,)
+    np.testing.assert_array_equal(xpos, [0, 0, 1])
+
+
+def test_single_element_scalar_field_reads_as_a_scalar(scene):
+    mass = scene.physics.bind(scene.ball_body).mass
+    assert np.ndim(mass) == 0
+    assert mass == pytest.approx(1000 * 4 / 3 * np.pi * 0.1**3)
+
+
+def test_list_binding_has_one_row_per_element(scene):
+    rgba = scene.physics.bind([scene.ball, scene.upper, scene.lower]).rgba
+    assert rgba.shape == (3, 4)
+    np.testing.assert_array_equal(rgba[0], [1, 0, 0, 1])
+
+
+def test_list_of_one_element_keeps_the_list_dimension(scene):
+    assert scene.physics.bind([scene.ball]).xpos.shape == (1, 3)
+
+
+def test_attached_site_position_is_in_world_coordinates(scene):
+    np.testing.assert_allclose(scene.physics.bind(scene.robot_site).xpos, [2.1, 0.2, 0.8])
+
+
+def test_hinge_qpos_is_one_wide(scene):
+    assert scene.physics.bind(scene.hinge).qpos.shape == (1,)
+
+
+def test_ball_joint_qpos_is_a_quaternion(scene):
+    np.testing.assert_array_equal(scene.physics.bind(scene.ball_joint).qpos, [1, 0, 0, 0])
+
+
+def test_free_joint_qpos_is_position_and_quaternion(scene):
+    np.testing.assert_array_equal(scene.physics.bind(scene.free).qpos, [0, 0, 1, 1, 0, 0, 0])
+
+
+def test_free_joint_qvel_is_six_wide(scene):
+    assert scene.physics.bind(scene.free).qvel.shape == (6,)
+
+
+def test_joint_list_qpos_concatenates_each_joint(scene):
+    physics = scene.physics
+    physics.data.qpos[:] = np.arange(physics.model.nq)
+    hinge = scene.object_id(mujoco.mjtObj.mjOBJ_JOINT, "hinge")
+    ball = scene.object_id(mujoco.mjtObj.mjOBJ_JOINT, "ball_joint")
+    hinge_adr = physics.model.jnt_qposadr[hinge]
+    ball_adr = physics.model.jnt_qposadr[ball]
+    expected = np.concatenate(
+        [physics.data.qpos[ball_adr : ball_adr + 4], physics.data.qpos[hinge_adr : hinge_adr + 1]]
+    )
+    np.testing.assert_array_equal(physics.bind([scene.ball_joint, scene.hinge]).qpos, expected)
+
+
+def test_joint_dof_fields_drop_the_dof_prefix(scene):
+    assert scene.physics.bind(scene.hinge).damping == pytest.approx([0.25])
+
+
+def test_joint_range_reads_the_compiled_model_in_radians(scene):
+    np.testing.assert_allclose(scene.physics.bind(scene.hinge).range, [-np.pi / 4, np.pi / 2])
+
+
+def test_actuator_control_is_a_scalar_that_writes_ctrl(scene):
+    physics = scene.physics
+    physics.bind(scene.motor).ctrl = 0.75
+    assert physics.bind(scene.motor).ctrl == 0.75
+    assert physics.data.ctrl[scene.object_id(mujoco.mjtObj.mjOBJ_ACTUATOR, "motor")] == 0.75
+
+
+def test_actuator_gear_is_six_wide(scene):
+    np.testing.assert_array_equal(scene.physics.bind(scene.motor).gear, [2, 0, 0, 0, 0, 0])
+
+
+def test_actuator_force_follows_the_control(scene):
+    physics = scene.physics
+    physics.bind(scene.motor).ctrl = 0.5
+    physics.forward()
+    assert physics.bind(scene.motor).force == pytest.approx(0.5)
+    assert physics.bind(scene.hinge).qfrc_actuator == pytest.approx([1.0])
+
+
+def test_actuator_activation_exists_only_for_stateful_actuators(scene):
+    physics = scene.physics
+    physics.data.act[:] = [0.125]
+    assert physics.bind(scene.filtered).act == 0.125
+    np.testing.assert_array_equal(physics.bind([scene.motor, scene.filtered]).act, [0.125])
+    assert physics.bind(scene.motor).act.size == 0
+
+
+def test_three_dimensional_sensor_reads_three_values(scene):
+    sensordata = scene.physics.bind(scene.tip_pos).sensordata
+    np.testing.assert_allclose(sensordata, [1.6, 0, 1])
+
+
+def test_sensor_list_concatenates_readings(scene):
+    physics = scene.physics
+    values = physics.bind([scene.hinge_pos, scene.tip_pos]).sensordata
+    assert values.shape == (4,)
+    np.testing.assert_allclose(values, [0, 1.6, 0, 1])
+
+
+def test_tendon_length_follows_the_joint(scene):
+    physics = scene.physics
+    physics.bind(scene.hinge).qpos = 0.25
+    assert physics.bind(scene.tendon).length == pytest.approx(0.5)
+
+
+def test_worldbody_binds_to_the_world_body(scene):
+    np.testing.assert_array_equal(scene.physics.bind(scene.root.worldbody).xpos, [0, 0, 0])
+
+
+def test_attachment_frame_binds_as_a_body(scene):
+    np.testing.assert_array_equal(scene.physics.bind(scene.frame).xpos, [2, 0, 0])
+
+
+def test_attribute_write_changes_the_model(scene):
+    physics = scene.physics
+    physics.bind(scene.ball).rgba = [0, 1, 0, 1]
+    np.testing.assert_array_equal(
+        physics.model.geom_rgba[scene.object_id(mujoco.mjtObj.mjOBJ_GEOM, "ball")], [0, 1, 0, 1]
+    )
+
+
+def test_item_write_on_a_consecutive_list_writes_through(scene):
+    physics = scene.physics
+    geoms = [scene.upper, scene.lower]
+    physics.bind(geoms).rgba[:, 3] = 0.5
+    for name in ("upper", "lower"):
+        assert physics.model.geom_rgba[scene.object_id(mujoco.mjtObj.mjOBJ_GEOM, name), 3] == 0.5
+
+
+def test_item_write_on_a_scattered_list_writes_through(scene):
+    physics = scene.physics
+    geoms = [scene.lower, scene.ball, scene.robot_geom]
+    physics.bind(geoms).rgba[:, 3] = 0.25
+    for name in ("lower", "ball", "robot/base_geom"):
+        assert physics.model.geom_rgba[scene.object_id(mujoco.mjtObj.mjOBJ_GEOM, name), 3] == 0.25
+
+
+def test_item_write_on_a_scattered_list_keeps_rows_updated_elsewhere(scene):
+    physics = scene.physics
+    bound = physics.bind([scene.lower, scene.ball])
+    rgba = bound.rgba
+    ball = scene.object_id(mujoco.mjtObj.mjOBJ_GEOM, "ball")
+    physics.model.geom_rgba[ball] = [0, 0, 1, 1]
+    rgba[0, 0] = 0.5
+    np.testing.assert_array_equal(physics.model.geom_rgba[ball], [0, 0, 1, 1])
+
+
+def test_scattered_list_reads_fresh_values_after_a_step(scene):
+    physics = scene.physics
+    bound = physics.bind([scene.ball_body, scene.target])
+    before = bound.xpos.copy()
+    physics.step(20)
+    assert bound.xpos[0, 2] < before[0, 2]
+
+
+def test_qpos_write_is_seen_by_a_later_position_read(scene):
+    physics = scene.physics
+    physics.bind(scene.hinge).qpos = np.pi / 2
+    # Rotating +90 degrees about y turns the arm's x axis into -z.
+    np.testing.assert_allclose(physics.bind(scene.tip).xpos, [1, 0, 0.4], atol=1e-12)
+
+
+def test_item_write_to_joint_list_is_seen_by_a_later_position_read(scene):
+    physics = scene.physics
+    physics.bind([scene.hinge, scene.robot_joint]).qpos[1] = 0.5  # slides along z
+    np.testing.assert_allclose(physics.bind(scene.robot_site).xpos, [2.1, 0.2, 1.3])
+
+
+def test_item_write_to_consecutive_joints_is_seen_by_a_later_position_read(scene):
+    physics = scene.physics
+    physics.bind([scene.hinge, scene.ball_joint]).qpos[0] = np.pi / 2
+    np.testing.assert_allclose(physics.bind(scene.tip).xpos, [1, 0, 0.4], atol=1e-12)
+
+
+def test_derived_read_after_write_refreshes_only_once(scene):
+    physics = scene.physics
+    physics.bind(scene.hinge).qpos = 0.1
+    assert physics.is_dirty
+    _ = physics.bind(scene.tip).xpos
+    assert not physics.is_dirty
+
+
+def test_geom_position_write_moves_a_geom_that_shared_its_body_frame(scene):
+    physics = scene.physics
+    ball = scene.object_id(mujoco.mjtObj.mjOBJ_GEOM, "ball")
+    assert physics.model.geom_sameframe[ball] != 0
+    physics.bind(scene.ball).pos = [0.5, 0, 0]
+    np.testing.assert_allclose(physics.bind(scene.ball).xpos, [0.5, 0, 1])
+
+
+def test_mocap_position_moves_a_mocap_body(scene):
+    physics = scene.physics
+    physics.bind(scene.target).mocap_pos = [3, 2, 1]
+    np.testing.assert_array_equal(physics.bind(scene.target).xpos, [3, 2, 1])
+
+
+def test_mocap_position_of_a_regular_body_is_an_error(scene):
+    with pytest.raises(AttributeError, match="mocap_pos"):
+        _ = scene.physics.bind(scene.arm).mocap_pos
+
+
+def test_column_names_index_a_binding(scene):
+    physics = scene.physics
+    bound = physics.bind([scene.ball_body, scene.target])
+    np.testing.assert_array_equal(bound["xpos", ["x", "z"]], [[0, 1], [0, 1]])
+    np.testing.assert_array_equal(bound["xpos"], bound.xpos)
+
+
+def test_column_write_through_a_binding(scene):
+    physics = scene.physics
+    physics.bind([scene.ball, scene.upper])["rgba", "g"] = 0.75
+    np.testing.assert_array_equal(physics.bind([scene.ball, scene.upper]).rgba[:, 1], [0.75, 0.75])
+
+
+def test_element_id_matches_mujoco_ids(scene):
+    physics = scene.physics
+    geom = mujoco.mjtObj.mjOBJ_GEOM
+    assert physics.bind(scene.ball).element_id == scene.object_id(geom, "ball")
+    np.testing.assert_array_equal(
+        physics.bind([scene.lower, scene.robot_geom]).element_id,
+        [scene.object_id(geom, "lower"), scene.object_id(geom, "robot/base_geom")],
+    )
+
+
+def test_binding_the_same_elements_again_returns_the_cached_binding(scene):
+    physics = scene.physics
+    assert physics.bind(scene.ball) is physics.bind(scene.ball)
+    assert physics.bind([scene.ball, scene.upper]) is physics.bind([scene.ball, scene.upper])
+    assert physics.bind([scene.ball, scene.upper]) is physics.bind((scene.ball, scene.upper))
+
+
+def test_binding_a_generator_binds_its_elements(scene):
+    physics = scene.physics
+    bound = physics.bind(geom for geom in (scene.ball, scene.upper))
+    assert bound is physics.bind([scene.ball, scene.upper])
+
+
+def test_binding_none_returns_none(scene):
+    assert scene.physics.bind(None) is None
+
+
+def test_empty_binding_reads_empty_arrays(scene):
+    assert scene.physics.bind([]).xpos.shape == (0,)
+
+
+def test_empty_binding_rejects_writes(scene):
+    with pytest.raises(ValueError, match="no elements"):
+        scene.physics.bind([]).qpos = 1
+
+
+def test_element_of_another_model_is_an_error_naming_it(scene):
+    other = mjcf.RootElement(model="other")
+    stranger = other.worldbody.add("geom", name="ball", size=[1])
+    with pytest.raises(ValueError, match=r"<geom name='ball'>.*another model"):
+        scene.physics.bind(stranger)
+
+
+def test_element_added_after_compiling_is_an_error(scene):
+    late = scene.root.worldbody.add("geom", name="late", size=[1])
+    with pytest.raises(ValueError, match="no geom named 'late'"):
+        scene.physics.bind(late)
+
+
+def test_element_without_a_compiled_object_is_an_error(scene):
+    with pytest.raises(ValueError, match="<compiler>"):
+        scene.physics.bind(scene.root.compiler)
+
+
+def test_mixed_element_kinds_are_an_error(scene):
+    with pytest.raises(ValueError, match=r"<geom name='ball'>.*<joint name='hinge'>"):
+        scene.physics.bind([scene.ball, scene.hinge])
+
+
+def test_unknown_attribute_suggests_close_names(scene):
+    with pytest.raises(AttributeError, match="did you mean.*xpos"):
+        _ = scene.physics.bind(scene.ball).xposs
+
+
+def test_binding_lists_its_attributes(scene):
+    attributes = dir(scene.physics.bind(scene.hinge))
+    assert {"qpos", "qvel", "range", "damping", "armature", "qfrc_actuator"} <= set(attributes)
+
+
+class _FakeSpec:
+    def __init__(self, namespace):
+        self.namespace = namespace
+
+
+class _FakeElement:
+    """The element interface bind relies on, without the mjcf model layer."""
+
+    def __init__(self, tag, namespace, full_identifier):
+        self.tag = tag
+        self.spec = _FakeSpec(namespace)
+        self.full_identifier = full_identifier
+        self.root = None
+
+
+def test_binds_any_element_with_the_mjcf_interface():
+    physics = Physics.from_xml_string(
+        '<mujoco><worldbody><body name="b" pos="1 2 3"><joint name="j"/>'
+        '<geom name="g" size="1"/></body></worldbody></mujoco>'
+    )
+    body = _FakeElement("body", "body", "b")
+    np.testing.assert_array_equal(physics.bind(body).xpos, [1, 2, 3])
+    assert physics.bind(_FakeElement("joint", "joint", "j")).qpos.shape == (1,)
+
+
+def test_element_of_a_detached_model_is_an_error(scene):
+    scene.robot.detach()
+    with pytest.raises(ValueError, match="<site name='sensor_site'>.*another model"):
+        scene.physics.bind(scene.robot_site)
+
+
+def test_worldbody_of_an_attached_model_is_an_error_pointing_to_the_frame(scene):
+    with pytest.raises(ValueError, match="attachment frame"):
+        scene.physics.bind(scene.robot.worldbody)
+
+
+def test_non_element_in_a_list_is_an_error_naming_its_position(scene):
+    with pytest.raises(ValueError, match="item 1 is a NoneType"):
+        scene.physics.bind([scene.ball, None])
+
+
+def test_augmented_item_assignment_on_a_scattered_list_writes_through(scene):
+    physics = scene.physics
+    bound = physics.bind([scene.lower, scene.ball])
+    bound.rgba[:, 3] *= 0.5
+    ball = scene.object_id(mujoco.mjtObj.mjOBJ_GEOM, "ball")
+    assert physics.model.geom_rgba[ball, 3] == 0.5
+
+
+def test_boolean_mask_assignment_on_a_scattered_list_writes_through(scene):
+    physics = scene.physics
+    rgba = physics.bind([scene.lower, scene.ball]).rgba
+    rgba[rgba == 0] = 0.125
+    ball = scene.object_id(mujoco.mjtObj.mjOBJ_GEOM, "ball")
+    np.testing.assert_array_equal(physics.model.geom_rgba[ball], [1, 0.125, 0.125, 1])

@@ -1,0 +1,340 @@
+"""Tests for mjcf.Physics: construction, stepping, resets, errors, state and copies."""
+
+import logging
+
+import mujoco
+import numpy as np
+import pytest
+
+import mjcf
+from mjcf.physics import Physics, PhysicsError
+
+_XML = """
+<mujoco model="pendulums">
+  <option timestep="0.005" integrator="{integrator}"/>
+  <worldbody>
+    <geom name="floor" type="plane" size="5 5 .1"/>
+    <body name="ball_body" pos="0 0 1">
+      <freejoint name="free"/>
+      <geom name="ball" size="0.1"/>
+    </body>
+    <body name="arm" pos="1 0 1">
+      <joint name="hinge" type="hinge" axis="0 1 0" damping="0.01"/>
+      <geom name="upper" type="capsule" fromto="0 0 0 0.3 0 0" size="0.04"/>
+      <body name="forearm" pos="0.3 0 0">
+        <joint name="ball_joint" type="ball"/>
+        <geom name="lower" type="capsule" fromto="0 0 0 0.3 0 0" size="0.03"/>
+      </body>
+    </body>
+  </worldbody>
+  <actuator>
+    <motor name="hinge_motor" joint="hinge" gear="2"/>
+    <general name="filtered" joint="hinge" dyntype="filter" dynprm="0.1"/>
+  </actuator>
+  <keyframe>
+    <key name="bent" qpos="0 0 2 1 0 0 0 0.5 1 0 0 0" ctrl="1 0"/>
+  </keyframe>
+</mujoco>
+"""
+
+
+def _xml(integrator="Euler"):
+    return _XML.format(integrator=integrator)
+
+
+@pytest.fixture
+def physics():
+    return Physics.from_xml_string(_xml())
+
+
+def _body_id(physics, name):
+    return mujoco.mj_name2id(physics.model.ptr, mujoco.mjtObj.mjOBJ_BODY, name)
+
+
+def test_physics_and_error_are_exported_from_mjcf():
+    assert mjcf.Physics is Physics
+    assert mjcf.PhysicsError is PhysicsError
+
+
+def test_from_xml_string_compiles_the_model():
+    physics = Physics.from_xml_string(_xml())
+    assert physics.model.nbody == 4
+    assert physics.model.njnt == 3
+    assert physics.model.nu == 2
+
+
+def test_from_xml_string_resolves_files_from_assets():
+    xml = '<mujoco><include file="part.xml"/></mujoco>'
+    part = b'<mujoco><worldbody><geom name="from_asset" size="1"/></worldbody></mujoco>'
+    physics = Physics.from_xml_string(xml, assets={"part.xml": part})
+    assert physics.model.name2id("from_asset", "geom") == 0
+
+
+def test_from_xml_path_loads_a_file(tmp_path):
+    path = tmp_path / "model.xml"
+    path.write_text(_xml())
+    assert Physics.from_xml_path(str(path)).model.nq == 12
+
+
+def test_from_binary_path_loads_an_mjb_file(tmp_path):
+    path = tmp_path / "model.mjb"
+    mujoco.mj_saveModel(mujoco.MjModel.from_xml_string(_xml()), str(path), None)
+    assert Physics.from_binary_path(str(path)).model.nv == 10
+
+
+def test_from_model_uses_the_given_model():
+    model = mujoco.MjModel.from_xml_string(_xml())
+    physics = Physics.from_model(model)
+    assert physics.model.ptr is model
+    assert isinstance(physics.data.ptr, mujoco.MjData)
+
+
+def test_construction_computes_positions(physics):
+    np.testing.assert_allclose(physics.data.xpos[_body_id(physics, "ball_body")], [0, 0, 1])
+
+
+def test_legacy_step_leaves_positions_in_sync_with_qpos(physics):
+    physics.step(10)
+    body = _body_id(physics, "ball_body")
+    np.testing.assert_array_equal(physics.data.xpos[body], physics.data.qpos[:3])
+
+
+def test_plain_step_leaves_positions_one_step_behind_qpos(physics):
+    physics.legacy_step = False
+    physics.step(10)
+    body = _body_id(physics, "ball_body")
+    assert physics.data.xpos[body][2] > physics.data.qpos[2]
+
+
+def test_legacy_step_follows_the_same_trajectory_as_mj_step(physics):
+    model = physics.model.ptr
+    reference = mujoco.MjData(model)
+    reference.ctrl[:] = physics.data.ctrl[:] = [0.3, 0.5]
+    for _ in range(20):
+        mujoco.mj_step(model, reference)
+    physics.step(20)
+    np.testing.assert_array_equal(physics.data.qpos, reference.qpos)
+    np.testing.assert_array_equal(physics.data.act, reference.act)
+
+
+def test_plain_step_matches_mj_step(physics):
+    physics.legacy_step = False
+    model = physics.model.ptr
+    reference = mujoco.MjData(model)
+    mujoco.mj_forward(model, reference)
+    physics.step(7)
+    for _ in range(7):
+        mujoco.mj_step(model, reference)
+    np.testing.assert_array_equal(physics.data.qpos, reference.qpos)
+
+
+@pytest.mark.parametrize("integrator", ["Euler", "RK4", "implicitfast"])
+@pytest.mark.parametrize("legacy_step", [True, False])
+def test_step_in_one_chunk_equals_single_steps(integrator, legacy_step):
+    chunked = Physics.from_xml_string(_xml(integrator))
+    single = Physics.from_xml_string(_xml(integrator))
+    for physics in (chunked, single):
+        physics.legacy_step = legacy_step
+        physics.set_control([0.4, -0.2])
+    chunked.step(150)  # long enough for the ball to land: contacts are included
+    for _ in range(150):
+        single.step()
+    assert single.data.ncon > 0
+    np.testing.assert_array_equal(chunked.data.qpos, single.data.qpos)
+    np.testing.assert_array_equal(chunked.data.qvel, single.data.qvel)
+    np.testing.assert_array_equal(chunked.data.xpos, single.data.xpos)
+
+
+def test_step_advances_time_by_nstep_timesteps(physics):
+    physics.step(4)
+    assert physics.time() == pytest.approx(4 * 0.005)
+
+
+def test_timestep_reads_the_model_option(physics):
+    assert physics.timestep() == 0.005
+
+
+def test_forward_updates_positions_after_a_qpos_write(physics):
+    physics.data.qpos[:3] = [2, 3, 4]
+    physics.forward()
+    np.testing.assert_array_equal(physics.data.xpos[_body_id(physics, "ball_body")], [2, 3, 4])
+
+
+def test_reset_restores_the_initial_state(physics):
+    physics.step(50)
+    physics.reset()
+    assert physics.time() == 0
+    np.testing.assert_array_equal(physics.data.qpos, physics.model.qpos0)
+
+
+def test_reset_to_keyframe_loads_its_qpos(physics):
+    physics.reset(keyframe_id=0)
+    np.testing.assert_array_equal(physics.data.qpos, physics.model.key_qpos[0])
+
+
+def test_reset_runs_forward_without_actuation(physics):
+    physics.reset(keyframe_id=0)
+    assert physics.data.ctrl[0] == 1
+    assert not physics.data.qfrc_actuator.any()
+
+
+def test_reset_rejects_a_missing_keyframe(physics):
+    with pytest.raises(ValueError, match="keyframe_id 3"):
+        physics.reset(keyframe_id=3)
+
+
+def test_reset_context_keeps_the_state_set_inside_and_updates_positions(physics):
+    physics.step(10)
+    with physics.reset_context() as yielded:
+        assert yielded is physics
+        physics.data.qpos[:3] = [0, 2, 5]
+    assert physics.time() == 0
+    np.testing.assert_array_equal(physics.data.xpos[_body_id(physics, "ball_body")], [0, 2, 5])
+
+
+def test_reset_context_propagates_errors_raised_inside(physics):
+    with pytest.raises(KeyError):
+        with physics.reset_context():
+            raise KeyError("from the block")
+
+
+def test_after_reset_updates_positions(physics):
+    physics.data.qpos[:3] = [1, 1, 1]
+    physics.after_reset()
+    np.testing.assert_array_equal(physics.data.xpos[_body_id(physics, "ball_body")], [1, 1, 1])
+
+
+def test_step_raises_physics_error_on_divergence(physics):
+    physics.data.qvel[0] = np.nan
+    with pytest.raises(PhysicsError, match="Physics state is invalid.*mjWARN_BADQ"):
+        physics.step()
+
+
+def test_suppress_physics_errors_logs_instead_of_raising(physics, caplog):
+    physics.data.qvel[0] = np.nan
+    with caplog.at_level(logging.WARNING):
+        with physics.suppress_physics_errors():
+            physics.step()
+    assert "mjWARN_BADQ" in caplog.text
+
+
+def test_suppress_physics_errors_is_undone_after_the_block(physics):
+    with physics.suppress_physics_errors():
+        pass
+    physics.data.qvel[0] = np.nan
+    with pytest.raises(PhysicsError):
+        physics.step()
+
+
+def test_check_invalid_state_raises_for_warnings_inside_the_block(physics):
+    physics.data.qpos[0] = np.nan
+    with pytest.raises(PhysicsError, match="mjWARN_BADQPOS"):
+        with physics.check_invalid_state():
+            mujoco.mj_step(physics.model.ptr, physics.data.ptr)
+
+
+def test_set_control_writes_the_controls(physics):
+    physics.set_control([0.25, -0.5])
+    np.testing.assert_array_equal(physics.data.ctrl, [0.25, -0.5])
+
+
+def test_control_returns_a_copy(physics):
+    physics.set_control([1, 2])
+    control = physics.control()
+    control[:] = 0
+    np.testing.assert_array_equal(physics.data.ctrl, [1, 2])
+
+
+def test_get_state_is_qpos_qvel_act(physics):
+    physics.set_control([0.3, 0.7])
+    physics.step(5)
+    data = physics.data
+    expected = np.concatenate([data.qpos, data.qvel, data.act])
+    np.testing.assert_array_equal(physics.get_state(), expected)
+    np.testing.assert_array_equal(physics.state(), expected)
+
+
+def test_set_state_restores_a_saved_state(physics):
+    physics.set_control([0.3, 0.7])
+    physics.step(5)
+    saved = physics.get_state()
+    qpos = physics.data.qpos.copy()
+    act = physics.data.act.copy()
+    physics.step(20)
+    physics.set_state(saved)
+    np.testing.assert_array_equal(physics.data.qpos, qpos)
+    np.testing.assert_array_equal(physics.data.act, act)
+
+
+def test_set_state_rejects_a_wrong_size(physics):
+    with pytest.raises(ValueError, match=r"expected \(23,\)"):
+        physics.set_state(np.zeros(5))
+
+
+def test_copy_starts_from_the_same_state(physics):
+    physics.step(5)
+    copied = physics.copy()
+    np.testing.assert_array_equal(copied.data.qpos, physics.data.qpos)
+    assert copied.time() == physics.time()
+
+
+def test_copy_steps_independently(physics):
+    copied = physics.copy()
+    copied.step(10)
+    assert physics.time() == 0
+    assert copied.time() > 0
+
+
+def test_copy_copies_the_model_by_default(physics):
+    copied = physics.copy()
+    copied.model.geom_rgba[0] = [0, 0, 0, 0]
+    assert physics.model.geom_rgba[0, 3] != 0
+
+
+def test_copy_can_share_the_model(physics):
+    assert physics.copy(share_model=True).model.ptr is physics.model.ptr
+
+
+def test_free_makes_the_physics_unusable(physics):
+    physics.free()
+    with pytest.raises(AttributeError):
+        physics.step()
+
+
+def _arm_model():
+    root = mjcf.RootElement(model="scene")
+    arm = mjcf.RootElement(model="arm")
+    link = arm.worldbody.add("body", name="link")
+    link.add("joint", name="elbow", type="hinge", range=[1, -1], limited=True)
+    link.add("geom", name="link_geom", size=[0.1])
+    root.worldbody.attach(arm)
+    return root
+
+
+def test_from_mjcf_model_compiles_attached_models():
+    root = mjcf.RootElement(model="scene")
+    arm = mjcf.RootElement(model="arm")
+    arm.worldbody.add("body", name="link").add("geom", name="link_geom", size=[0.1])
+    root.worldbody.attach(arm)
+    physics = Physics.from_mjcf_model(root)
+    assert physics.model.name2id("arm/link_geom", "geom") >= 0
+
+
+def test_from_mjcf_model_error_names_the_offending_element():
+    with pytest.raises(ValueError) as raised:
+        Physics.from_mjcf_model(_arm_model())
+    assert "'arm/elbow'" in str(raised.value)
+    assert '<joint name="arm/elbow"' in str(raised.value)
+
+
+def test_from_mjcf_model_error_keeps_mujocos_message():
+    with pytest.raises(ValueError, match="range"):
+        Physics.from_mjcf_model(_arm_model())
+
+
+def test_reload_from_mjcf_model_recompiles():
+    physics = Physics.from_xml_string(_xml())
+    root = mjcf.RootElement(model="small")
+    root.worldbody.add("geom", name="only", size=[1])
+    physics.reload_from_mjcf_model(root)
+    assert physics.model.ngeom == 1
