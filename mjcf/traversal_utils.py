@@ -11,32 +11,32 @@ def get_attachment_frame(mjcf_model: RootElement):
     return mjcf_model._frame
 
 
-def get_frame_freejoint(frame: Element) -> Element | None:
-    """The `<freejoint>` (or free `<joint>`) directly in `frame`, or None."""
-    if frame is None:
+def get_freejoint(element: Element) -> Element | None:
+    """The `<freejoint>` (or free `<joint>`) directly in a body or attachment frame, or None."""
+    if element is None:
         return None
-    for child in frame._children:
+    for child in element._children:
         tag = child._spec.name
         if tag == "freejoint" or (tag == "joint" and child._attributes.get("type") == "free"):
             return child
     return None
 
 
-def get_frame_joints(frame: Element) -> tuple | None:
-    """The non-free joints directly in `frame`, or None when there are none."""
+def get_frame_freejoint(mjcf_model: RootElement) -> Element | None:
+    """The free joint of the frame `mjcf_model` is attached at, or None."""
+    return get_freejoint(get_attachment_frame(mjcf_model))
+
+
+def get_frame_joints(mjcf_model: RootElement) -> list[Element] | None:
+    """The non-free joints of the frame `mjcf_model` is attached at (None when not attached)."""
+    frame = get_attachment_frame(mjcf_model)
     if frame is None:
         return None
-    joints = tuple(
+    return [
         child
         for child in frame._children
         if child._spec.name == "joint" and child._attributes.get("type") != "free"
-    )
-    return joints or None
-
-
-def get_freejoint(element: Element) -> Element | None:
-    """The free joint directly in a body or attachment frame, or None."""
-    return get_frame_freejoint(element)
+    ]
 
 
 def _default_chain(element: Element, dclass) -> list[Element]:

@@ -64,23 +64,33 @@ def test_commit_defaults_with_unknown_class_is_an_error():
         traversal_utils.commit_defaults(root)
 
 
-def test_frame_freejoint_and_joints():
+def test_frame_joints_are_read_through_the_attached_model():
     parent = mjcf.RootElement()
     child = mjcf.RootElement(model="child")
     child.worldbody.add("geom", size=[0.1])
     frame = parent.attach(child)
-    assert mjcf.get_frame_freejoint(frame) is None
-    assert mjcf.get_frame_joints(frame) is None
+    assert mjcf.get_frame_freejoint(child) is None
+    assert mjcf.get_frame_joints(child) == []
     slide = frame.add("joint", type="slide", name="x")
     hinge = frame.add("joint", name="h")
-    assert mjcf.get_frame_joints(frame) == (slide, hinge)
+    assert mjcf.get_frame_joints(child) == [slide, hinge]
+
+
+def test_frame_freejoint_is_read_through_the_attached_model():
+    parent = mjcf.RootElement()
     free = mjcf.RootElement(model="free")
     free.worldbody.add("geom", size=[0.1])
     free_frame = parent.attach(free)
     joint = free_frame.add("freejoint")
-    assert mjcf.get_frame_freejoint(free_frame) is joint
+    assert mjcf.get_frame_freejoint(free) is joint
     assert mjcf.get_freejoint(free_frame) is joint
     assert mjcf.get_attachment_frame(free) is free_frame
+
+
+def test_frame_helpers_of_an_unattached_model_return_none():
+    loose = mjcf.RootElement(model="loose")
+    assert mjcf.get_frame_freejoint(loose) is None
+    assert mjcf.get_frame_joints(loose) is None
 
 
 def test_asset_objects_can_be_assigned_directly():
