@@ -1,0 +1,385 @@
+"""The Composer environment: a `dm_env.Environment` that runs a `composer.Task`."""
+
+import enum
+import math
+import numbers
+import weakref
+
+import dm_env
+import numpy as np
+from absl import logging
+
+import mjcf
+from composer import observation
+from composer.action_validation import ActionValidator
+from composer.hooks import HOOK_NAMES, EnvironmentHooks
+from composer.model_snapshot import ModelSnapshot, snapshots_supported
+
+__all__ = [
+    "HOOK_NAMES",
+    "Environment",
+    "EpisodeInitializationError",
+    "ObservationPadding",
+]
+
+
+class EpisodeInitializationError(RuntimeError):
+    """Raised by a task or entity when it fails to set up an episode; reset may retry."""
+
+
+class ObservationPadding(enum.Enum):
+    """What a delayed observation buffer holds before its first sample arrives."""
+
+    INITIAL_VALUE = -1
+    ZERO = 0
+
+
+def _positive_int(name: str, value) -> int:
+    if isinstance(value, bool) or not isinstance(value, numbers.Integral) or value < 1:
+        raise ValueError(f"{name}: expected an integer >= 1, got {value!r}")
+    return int(value)
+
+
+class Environment(dm_env.Environment):
+    """Runs a `composer.Task` as a `dm_env.Environment`.
+
+    Args:
+      task: the `composer.Task` to run.
+      time_limit: seconds of simulated time after which an episode ends (LAST, with
+        the task's discount).
+      random_state: an int seed or an `np.random.RandomState`; every hook gets it.
+      n_sub_steps: physics steps per control step, overriding the task's
+        `physics_steps_per_control_step`.
+      raise_exception_on_physics_error: if False, a `PhysicsError` while stepping
+        ends the episode with a logged warning, reward 0 and discount 0, and the
+        next `step` starts a new episode.
+      strip_singleton_obs_buffer_dim: drop the leading buffer axis of observations
+        whose buffer size is 1.
+      max_reset_attempts: how many times `reset` tries to initialise an episode
+        when a hook raises `EpisodeInitializationError`.
+      recompile_mjcf_every_episode: run the `initialize_episode_mjcf` hooks before
+        every episode and start it from a freshly compiled model. The model is only
+        really recompiled when the MJCF tree changed since the last compile;
+        otherwise the compiled model's parameters are restored from a copy taken
+        right after compiling (undoing any writes through `physics.bind`), which is
+        indistinguishable and much faster. A recompile that changed only parameter
+        values (colours, sizes, masses, ...) loads them into the current model, so
+        the Physics and its bindings carry over; one that changed the model's
+        structure gives a new Physics. If False the model is compiled once and
+        changes made to it during an episode persist.
+      fixed_initial_state: restore the random state at every reset, so that every
+        episode starts from the same state.
+      delayed_observation_padding: an `ObservationPadding`.
+      legacy_step: step with position- and velocity-dependent quantities up to date
+        after each step (see `mjcf.Physics.step`).
+
+    Observables are collected from `task.observables` whenever the model is
+    compiled; enabling, disabling or reconfiguring them takes effect at the next
+    reset, and observables added to an entity take effect at the next compile.
+
+    `reset()` returns `TimeStep(FIRST, None, None, observation)`. `step(action)`
+    runs the task's and entities' `before_step` hooks, the physics sub-steps (with
+    `before_substep`/`after_substep` hooks around each when any is defined), then
+    `after_step`, and returns MID or LAST with the task's reward and discount. A
+    `step` after LAST (or before the first `reset`) resets instead and returns FIRST.
+    """
+
+    def __init__(
+        self,
+        task,
+        time_limit: float = float("inf"),
+        random_state=None,
+        n_sub_steps: int | None = None,
+        raise_exception_on_physics_error: bool = True,
+        strip_singleton_obs_buffer_dim: bool = False,
+        max_reset_attempts: int = 1,
+        recompile_mjcf_every_episode: bool = True,
+        fixed_initial_state: bool = False,
+        delayed_observation_padding: ObservationPadding = ObservationPadding.ZERO,
+        legacy_step: bool = True,
+    ):
+        if not isinstance(time_limit, numbers.Real) or math.isnan(time_limit) or time_limit < 0:
+            raise ValueError(f"time_limit: expected a number of seconds >= 0, got {time_limit!r}")
+        if not isinstance(delayed_observation_padding, ObservationPadding):
+            raise ValueError(
+                "delayed_observation_padding: expected ObservationPadding.ZERO or "
+                f"ObservationPadding.INITIAL_VALUE, got {delayed_observation_padding!r}"
+            )
+        self._task = task
+        self._time_limit = float(time_limit)
+        if isinstance(random_state, np.random.RandomState):
+            self._random_state = random_state
+        else:
+            self._random_state = np.random.RandomState(random_state)
+        self._overridden_n_sub_steps = (
+            None if n_sub_steps is None else _positive_int("n_sub_steps", n_sub_steps)
+        )
+        self._raise_exception_on_physics_error = raise_exception_on_physics_error
+        self._strip_singleton_obs_buffer_dim = strip_singleton_obs_buffer_dim
+        self._max_reset_attempts = _positive_int("max_reset_attempts", max_reset_attempts)
+        self._recompile_mjcf_every_episode = recompile_mjcf_every_episode
+        self._pad_with_initial_value = (
+            delayed_observation_padding is ObservationPadding.INITIAL_VALUE
+        )
+        self._legacy_step = legacy_step
+        self._hooks = EnvironmentHooks(task)
+        self._physics = None
+        self._physics_proxy = None
+        self._snapshot = None
+        self._compiled_modification_count = None
+        self._reset_next_step = True
+        self._compile()
+        self._observation_updater.reset(self._physics_proxy, self._random_state)
+        self._fixed_random_state = self._random_state.get_state() if fixed_initial_state else None
+
+    # Properties and specs.
+
+    @property
+    def physics(self):
+        """A `weakref.proxy` to the current `mjcf.Physics`.
+
+        A recompile that changes the model's structure replaces the Physics, after
+        which old proxies raise ReferenceError; other resets keep the same Physics.
+        """
+        return self._physics_proxy
+
+    @property
+    def task(self):
+        return self._task
+
+    @property
+    def random_state(self) -> np.random.RandomState:
+        return self._random_state
+
+    def control_timestep(self) -> float:
+        """Seconds between agent actions."""
+        if self._overridden_n_sub_steps is not None:
+            return self._physics.timestep() * self._overridden_n_sub_steps
+        return self._task.control_timestep
+
+    def add_extra_hook(self, hook_name: str, hook_callable) -> None:
+        """Calls `hook_callable` after the task's and entities' hooks named `hook_name`.
+
+        It receives the same arguments as the task's hook of that name.
+
+        Raises:
+          ValueError: if `hook_name` is not one of `HOOK_NAMES`.
+        """
+        self._hooks.add_extra_hook(hook_name, hook_callable)
+
+    def action_spec(self):
+        return self._task.action_spec(self._physics_proxy)
+
+    def observation_spec(self):
+        return self._observation_updater.observation_spec()
+
+    def reward_spec(self):
+        spec = self._task.get_reward_spec()
+        return super().reward_spec() if spec is None else spec
+
+    def discount_spec(self):
+        spec = self._task.get_discount_spec()
+        return super().discount_spec() if spec is None else spec
+
+    def close(self) -> None:
+        """Frees the physics; the environment cannot be used afterwards."""
+        if self._physics is not None:
+            self._physics.free()
+        self._physics = None
+        self._physics_proxy = None
+        self._snapshot = None
+
+    # Compiling.
+
+    def _compile(self) -> None:
+        """Compiles the root model and sets up everything that uses the compiled model.
+
+        When the new model differs from the current one only in parameter values
+        (colours, sizes, masses, ...), its parameters are loaded into the current
+        model in place and the current Physics, its data and bindings are kept.
+        """
+        root = self._task.root_entity.mjcf_model
+        physics = mjcf.Physics.from_mjcf_model(root)
+        self._compiled_modification_count = root.modification_count
+        if self._snapshot is not None and self._snapshot.load(physics.model.ptr):
+            physics.free()
+        else:
+            if self._physics is not None:
+                self._physics.free()
+            physics.legacy_step = self._legacy_step
+            self._physics = physics
+            self._physics_proxy = weakref.proxy(physics)
+            self._data = physics.data.ptr
+            self._snapshot = ModelSnapshot(physics.model.ptr) if snapshots_supported() else None
+        self._hooks.refresh_entity_hooks()
+        self._run_after_compile_hooks()
+        self._check_action = ActionValidator(self._task.action_spec(self._physics_proxy))
+        self._n_sub_steps = self._task_sub_steps()
+        self._observation_updater = self._make_observation_updater()
+
+    def _restore_compiled_model(self) -> None:
+        """Puts the compiled model back as it was right after compiling.
+
+        Everything built from the compiled model (Physics, bindings, action checks,
+        observation updater) stays valid; the after_compile hooks run again, as they
+        would after a real recompile.
+        """
+        self._snapshot.restore()
+        self._run_after_compile_hooks()
+        n_sub_steps = self._task_sub_steps()
+        if n_sub_steps != self._n_sub_steps:
+            self._n_sub_steps = n_sub_steps
+            self._observation_updater = self._make_observation_updater()
+
+    def _run_after_compile_hooks(self) -> None:
+        # The hooks may set state, so they run inside a reset context; a divergence
+        # there is reported but does not stop the episode from starting.
+        if not self._hooks.has_after_compile_hooks:
+            return
+        try:
+            with self._physics.reset_context():
+                self._hooks.after_compile(self._physics_proxy, self._random_state)
+        except mjcf.PhysicsError as error:
+            logging.warning("Physics error in after_compile hooks: %s", error)
+
+    def _task_sub_steps(self) -> int:
+        if self._overridden_n_sub_steps is not None:
+            return self._overridden_n_sub_steps
+        return self._task.physics_steps_per_control_step
+
+    def _make_observation_updater(self) -> observation.Updater:
+        return observation.Updater(
+            self._task.observables,
+            self._n_sub_steps,
+            self._strip_singleton_obs_buffer_dim,
+            self._pad_with_initial_value,
+        )
+
+    def _model_changed_since_compile(self) -> bool:
+        root = self._task.root_entity.mjcf_model
+        return root.modification_count != self._compiled_modification_count
+
+    # Resetting.
+
+    def reset(self) -> dm_env.TimeStep:
+        """Starts a new episode and returns its first TimeStep.
+
+        Tries up to `max_reset_attempts` times while a hook raises
+        `EpisodeInitializationError`; the last such error propagates.
+        """
+        if self._fixed_random_state is not None:
+            self._random_state.set_state(self._fixed_random_state)
+        attempt = 1
+        while True:
+            try:
+                return self._reset_attempt()
+            except EpisodeInitializationError as error:
+                if attempt >= self._max_reset_attempts:
+                    raise
+                logging.error(
+                    "Episode initialization failed (attempt %d of %d): %r",
+                    attempt,
+                    self._max_reset_attempts,
+                    error,
+                )
+                attempt += 1
+
+    def _reset_attempt(self) -> dm_env.TimeStep:
+        if self._recompile_mjcf_every_episode:
+            self._hooks.initialize_episode_mjcf(self._random_state)
+            if self._snapshot is None or self._model_changed_since_compile():
+                self._compile()
+            else:
+                self._restore_compiled_model()
+        with self._physics.reset_context():
+            self._hooks.initialize_episode(self._physics_proxy, self._random_state)
+        self._observation_updater.reset(self._physics_proxy, self._random_state)
+        self._reset_next_step = False
+        return dm_env.TimeStep(
+            step_type=dm_env.StepType.FIRST,
+            reward=None,
+            discount=None,
+            observation=self._observation_updater.get_observation(),
+        )
+
+    # Stepping.
+
+    def step(self, action) -> dm_env.TimeStep:
+        """Applies `action` for one control step and returns the resulting TimeStep.
+
+        Raises:
+          ValueError: if `action` does not match `action_spec()` in shape, cannot be
+            cast to its dtype, or holds NaN or infinity; nothing is stepped.
+          mjcf.PhysicsError: if the physics diverges and
+            `raise_exception_on_physics_error` is True.
+        """
+        if self._reset_next_step:
+            return self.reset()
+        action = self._check_action(action)
+        physics = self._physics_proxy
+        random_state = self._random_state
+        updater = self._observation_updater
+        self._hooks.before_step(physics, action, random_state)
+        updater.prepare_for_next_control_step()
+        try:
+            if self._hooks.has_substep_hooks:
+                unsampled_steps = self._substeps_with_hooks(action)
+            else:
+                unsampled_steps = self._substeps_in_chunks()
+        except mjcf.PhysicsError as error:
+            if self._raise_exception_on_physics_error:
+                raise
+            logging.warning("Physics error, ending the episode: %s", error)
+            self._hooks.after_step(physics, random_state)
+            updater.update()
+            self._reset_next_step = True
+            return dm_env.TimeStep(dm_env.StepType.LAST, 0.0, 0.0, updater.get_observation())
+        self._hooks.after_step(physics, random_state)
+        updater.update(unsampled_steps)
+        task = self._task
+        reward = task.get_reward(physics)
+        discount = task.get_discount(physics)
+        if task.should_terminate_episode(physics) or self._data.time >= self._time_limit:
+            self._reset_next_step = True
+            step_type = dm_env.StepType.LAST
+        else:
+            step_type = dm_env.StepType.MID
+        return dm_env.TimeStep(step_type, reward, discount, updater.get_observation())
+
+    def _substeps_in_chunks(self) -> int:
+        """Steps the physics straight through to each sub-step where observables are due.
+
+        Returns the number of steps taken since the last observation update; the
+        final update is left to the caller, after the `after_step` hooks.
+        """
+        updater = self._observation_updater
+        step = self._physics.step
+        n_sub_steps = self._n_sub_steps
+        done = 0
+        for sample_step in updater.sample_steps:
+            if sample_step >= n_sub_steps:
+                break
+            step(sample_step - done)
+            updater.update(sample_step - done)
+            done = sample_step
+        step(n_sub_steps - done)
+        return n_sub_steps - done
+
+    def _substeps_with_hooks(self, action) -> int:
+        """Steps the physics one sub-step at a time, calling the sub-step hooks around each."""
+        hooks = self._hooks
+        physics = self._physics_proxy
+        random_state = self._random_state
+        updater = self._observation_updater
+        sample_steps = updater.sample_steps
+        n_sub_steps = self._n_sub_steps
+        step = self._physics.step
+        done = 0
+        for sub_step in range(1, n_sub_steps + 1):
+            hooks.before_substep(physics, action, random_state)
+            step()
+            hooks.after_substep(physics, random_state)
+            if sub_step < n_sub_steps and sub_step in sample_steps:
+                updater.update(sub_step - done)
+                done = sub_step
+        return n_sub_steps - done

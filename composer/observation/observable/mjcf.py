@@ -1,0 +1,102 @@
+"""Observables addressed by MJCF elements rather than by compiled names."""
+
+import functools
+from collections.abc import Iterable
+
+import mjcf
+from composer.observation.observable import base
+
+
+def _check_element(obj, owner: str) -> None:
+    if not isinstance(obj, mjcf.Element):
+        raise ValueError(f"{owner}: expected an mjcf.Element, got {type(obj).__name__}: {obj!r}")
+
+
+def _check_elements(obj, owner: str) -> None:
+    if isinstance(obj, Iterable):
+        for element in obj:
+            _check_element(element, owner)
+    else:
+        _check_element(obj, owner)
+
+
+class MJCFFeature(base.Observable):
+    """An observable reading field `kind` of `physics.bind(mjcf_element)`.
+
+    `mjcf_element` is one element or a list of elements (`MJCFFeature('xpos', site)`,
+    `MJCFFeature('qpos', joints)`); `index`, when given, selects from the bound array.
+    """
+
+    def __init__(
+        self,
+        kind: str,
+        mjcf_element,
+        update_interval=1,
+        buffer_size=None,
+        delay=None,
+        aggregator=None,
+        corruptor=None,
+        index=None,
+    ):
+        _check_elements(mjcf_element, f"MJCFFeature({kind!r})")
+        self._kind = kind
+        self._mjcf_element = mjcf_element
+        self._index = index
+        super().__init__(update_interval, buffer_size, delay, aggregator, corruptor)
+
+    def _callable(self, physics):
+        binding = physics.bind(self._mjcf_element)
+        if self._index is None:
+            return functools.partial(getattr, binding, self._kind)
+        kind, index = self._kind, self._index
+        return lambda: getattr(binding, kind)[index]
+
+    def __repr__(self) -> str:
+        return f"<MJCFFeature observable {self._kind!r} of {self._mjcf_element!r}>"
+
+
+class MJCFCamera(base._ImageObservable):
+    """Images rendered from the MJCF `<camera>` element `mjcf_element`."""
+
+    def __init__(
+        self,
+        mjcf_element,
+        height=240,
+        width=320,
+        update_interval=1,
+        buffer_size=None,
+        delay=None,
+        aggregator=None,
+        corruptor=None,
+        depth=False,
+        segmentation=False,
+        scene_option=None,
+        render_flag_overrides=None,
+    ):
+        _check_element(mjcf_element, "MJCFCamera")
+        if mjcf_element.tag != "camera":
+            raise ValueError(f"MJCFCamera: expected a <camera> element, got <{mjcf_element.tag}>")
+        self._mjcf_element = mjcf_element
+        super().__init__(
+            height,
+            width,
+            update_interval,
+            buffer_size,
+            delay,
+            aggregator,
+            corruptor,
+            depth,
+            segmentation,
+            scene_option,
+            render_flag_overrides,
+        )
+
+    @property
+    def mjcf_element(self):
+        return self._mjcf_element
+
+    def _callable(self, physics):
+        return self._render_function(physics, self._mjcf_element.full_identifier)
+
+    def __repr__(self) -> str:
+        return f"<MJCFCamera observable of {self._mjcf_element!r}>"

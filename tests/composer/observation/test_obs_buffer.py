@@ -1,0 +1,136 @@
+"""Tests for composer.observation.obs_buffer.Buffer."""
+
+import collections
+
+import numpy as np
+import pytest
+
+from composer.observation.obs_buffer import Buffer
+
+
+def test_read_before_buffer_fills_pads_front_with_zeros():
+    buffer = Buffer(3, (2,), np.float64)
+    buffer.insert(0, 0, [1.0, 2.0])
+    np.testing.assert_array_equal(buffer.read(0), [[0, 0], [0, 0], [1, 2]])
+
+
+def test_read_pads_with_first_value_when_requested():
+    buffer = Buffer(3, (2,), np.float64, pad_with_initial_value=True)
+    buffer.insert(0, 0, [1.0, 2.0])
+    buffer.insert(1, 0, [3.0, 4.0])
+    np.testing.assert_array_equal(buffer.read(1), [[1, 2], [1, 2], [3, 4]])
+
+
+def test_read_returns_last_samples_oldest_first_after_wrapping():
+    buffer = Buffer(3, (), np.int64)
+    for t in range(5):
+        buffer.insert(t, 0, t * 10)
+    np.testing.assert_array_equal(buffer.read(4), [20, 30, 40])
+
+
+def test_delayed_sample_is_invisible_until_it_arrives():
+    buffer = Buffer(1, (), np.float64)
+    buffer.insert(0, 2, 7.0)
+    assert buffer.read(1)[0] == 0.0
+    assert buffer.read(2)[0] == 7.0
+
+
+def test_initial_value_padding_covers_a_delayed_first_sample():
+    buffer = Buffer(2, (), np.float64, pad_with_initial_value=True)
+    buffer.insert(0, 3, 5.0)
+    np.testing.assert_array_equal(buffer.read(1), [5.0, 5.0])
+
+
+def test_samples_are_delivered_in_arrival_order_not_timestamp_order():
+    buffer = Buffer(2, (), np.int64)
+    buffer.insert(1, 5, 1)  # arrives at 6
+    buffer.insert(2, 1, 2)  # arrives at 3
+    np.testing.assert_array_equal(buffer.read(6), [2, 1])
+
+
+def test_equal_arrivals_keep_timestamp_order():
+    buffer = Buffer(2, (), np.int64)
+    buffer.insert(1, 3, 1)  # arrives at 4
+    buffer.insert(2, 2, 2)  # arrives at 4
+    np.testing.assert_array_equal(buffer.read(4), [1, 2])
+
+
+def test_strip_singleton_buffer_dim_drops_leading_axis():
+    buffer = Buffer(1, (3,), np.float64, strip_singleton_buffer_dim=True)
+    buffer.insert(0, 0, [1.0, 2.0, 3.0])
+    assert buffer.shape == (3,)
+    np.testing.assert_array_equal(buffer.read(0), [1, 2, 3])
+
+
+def test_strip_singleton_buffer_dim_keeps_axis_for_larger_buffers():
+    buffer = Buffer(2, (3,), np.float64, strip_singleton_buffer_dim=True)
+    assert buffer.shape == (2, 3)
+
+
+def test_read_returns_an_array_later_inserts_do_not_change():
+    buffer = Buffer(1, (2,), np.float64)
+    buffer.insert(0, 0, [1.0, 1.0])
+    first = buffer.read(0)
+    buffer.insert(1, 0, [2.0, 2.0])
+    np.testing.assert_array_equal(first, [[1, 1]])
+
+
+def test_insert_copies_the_value_it_is_given():
+    buffer = Buffer(1, (2,), np.float64)
+    value = np.array([1.0, 1.0])
+    buffer.insert(0, 1, value)
+    value[:] = 9.0
+    np.testing.assert_array_equal(buffer.read(1), [[1, 1]])
+
+
+def test_negative_delay_is_rejected():
+    buffer = Buffer(1, (), np.float64)
+    with pytest.raises(ValueError, match="delay"):
+        buffer.insert(0, -1, 1.0)
+
+
+def test_wrong_shape_is_rejected_with_both_shapes():
+    buffer = Buffer(1, (3,), np.float64)
+    with pytest.raises(ValueError, match=r"\(2,\).*\(3,\)"):
+        buffer.insert(0, 0, [1.0, 2.0])
+
+
+def test_float_sample_into_integer_buffer_is_rejected():
+    buffer = Buffer(1, (), np.uint8)
+    with pytest.raises(ValueError, match="dtype float64"):
+        buffer.insert(0, 0, 1.5)
+
+
+def test_buffer_size_below_one_is_rejected():
+    with pytest.raises(ValueError, match="buffer_size"):
+        Buffer(0, (), np.float64)
+
+
+def test_drop_removes_samples_displaced_before_the_next_read():
+    buffer = Buffer(2, (), np.float64)
+    schedule = [(t, 0) for t in range(1, 6)]
+    buffer.drop_unobserved_upcoming_items(schedule, read_interval=5)
+    assert schedule == [(4, 0), (5, 0)]
+
+
+def test_drop_keeps_samples_arriving_at_a_later_read():
+    buffer = Buffer(1, (), np.float64)
+    schedule = collections.deque([(4, 0), (5, 3)])  # (5, 3) arrives at 8, read at 10
+    buffer.drop_unobserved_upcoming_items(schedule, read_interval=5)
+    assert list(schedule) == [(4, 0), (5, 3)]
+
+
+def test_drop_counts_samples_already_in_flight():
+    buffer = Buffer(1, (), np.float64)
+    buffer.insert(0, 4, 1.0)  # arrives at 4, after the scheduled sample at 3
+    schedule = [(3, 0)]
+    buffer.drop_unobserved_upcoming_items(schedule, read_interval=5)
+    assert schedule == []
+
+
+def test_read_earlier_than_every_held_sample_is_a_clear_error():
+    buffer = Buffer(1, (), np.float64)
+    buffer.insert(5, 1, 1.0)  # arrives at 6
+    buffer.insert(6, 1, 2.0)  # arrives at 7; the padding slot is gone
+    with pytest.raises(ValueError, match="precedes"):
+        buffer.read(4)

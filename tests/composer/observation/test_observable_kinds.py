@@ -1,0 +1,151 @@
+"""Tests of each observable kind against a compiled scene (feature and camera observables)."""
+
+import numpy as np
+import pytest
+
+import mjcf
+from composer.observation import observable, updater
+
+_HEIGHT, _WIDTH = 24, 32
+
+
+class _Scene:
+    """A red ball on a hinge under a downward camera, with a motor and a sensor."""
+
+    def __init__(self):
+        self.model = mjcf.RootElement(model="scene")
+        self.model.worldbody.add("light", pos=[0, 0, 3])
+        self.model.worldbody.add("geom", type="plane", size=[3, 3, 0.1], rgba=[0, 0, 1, 1])
+        self.arm = self.model.worldbody.add("body", name="arm", pos=[0, 0, 0.2])
+        self.hinge = self.arm.add("joint", name="hinge", type="hinge", axis=[0, 1, 0])
+        self.slide = self.arm.add("joint", name="slide", type="slide", axis=[1, 0, 0])
+        self.ball = self.arm.add("geom", name="ball", type="sphere", size=[0.1], rgba=[1, 0, 0, 1])
+        self.tip = self.arm.add("site", name="tip", pos=[0.1, 0, 0])
+        # Straight above the ball once the joints are set below.
+        ball_x = 0.25 * np.cos(0.5)
+        self.camera = self.model.worldbody.add("camera", name="top", pos=[ball_x, 0, 2])
+        self.motor = self.model.actuator.add("motor", joint=self.hinge)
+        self.sensor = self.model.sensor.add("framepos", objtype="site", objname=self.tip)
+        self.physics = mjcf.Physics.from_mjcf_model(self.model)
+        self.physics.bind([self.hinge, self.slide]).qpos = [0.5, 0.25]
+        self.physics.forward()
+
+
+@pytest.fixture(scope="module")
+def scene():
+    return _Scene()
+
+
+def test_mjcf_feature_of_one_site_reads_its_position(scene):
+    position = observable.MJCFFeature("xpos", scene.tip)(scene.physics)
+    # The slide axis turns with the hinge, so the site sits 0.25 + 0.1 along the turned x.
+    expected = [0.35 * np.cos(0.5), 0.0, 0.2 - 0.35 * np.sin(0.5)]
+    np.testing.assert_allclose(position, expected, atol=1e-9)
+
+
+def test_mjcf_feature_of_joint_list_reads_each_joint(scene):
+    np.testing.assert_allclose(
+        observable.MJCFFeature("qpos", [scene.hinge, scene.slide])(scene.physics), [0.5, 0.25]
+    )
+
+
+def test_mjcf_feature_index_selects_from_the_bound_value(scene):
+    obs = observable.MJCFFeature("xpos", scene.tip, index=2)
+    assert obs(scene.physics) == pytest.approx(0.2 - 0.35 * np.sin(0.5))
+
+
+def test_mjcf_feature_reads_sensor_data(scene):
+    np.testing.assert_allclose(
+        observable.MJCFFeature("sensordata", scene.sensor)(scene.physics),
+        observable.MJCFFeature("xpos", scene.tip)(scene.physics),
+    )
+
+
+def test_mjcf_feature_rejects_non_elements():
+    with pytest.raises(ValueError, match="mjcf.Element.*str"):
+        observable.MJCFFeature("xpos", "tip")
+
+
+def test_mujoco_feature_reads_by_compiled_name(scene):
+    np.testing.assert_allclose(
+        observable.MujocoFeature("site_xpos", "tip")(scene.physics),
+        observable.MJCFFeature("xpos", scene.tip)(scene.physics),
+    )
+
+
+def test_mujoco_feature_name_may_be_a_callable(scene):
+    obs = observable.MujocoFeature("qpos", lambda: ["slide"])
+    np.testing.assert_allclose(obs(scene.physics), [0.25])
+
+
+def test_mjcf_camera_rejects_elements_that_are_not_cameras(scene):
+    with pytest.raises(ValueError, match="<camera>.*<site>"):
+        observable.MJCFCamera(scene.tip)
+
+
+def test_mjcf_camera_renders_the_red_ball_below_it(scene):
+    image = observable.MJCFCamera(scene.camera, height=_HEIGHT, width=_WIDTH)(scene.physics)
+    assert (image.shape, image.dtype) == ((_HEIGHT, _WIDTH, 3), np.uint8)
+    red, green, blue = image[_HEIGHT // 2, _WIDTH // 2].astype(int)
+    assert red > 50 and red > 3 * max(green, blue)
+
+
+def test_mjcf_camera_depth_is_the_distance_to_the_ball_top(scene):
+    camera = observable.MJCFCamera(scene.camera, height=_HEIGHT, width=_WIDTH, depth=True)
+    depth = camera(scene.physics)
+    assert (depth.shape, depth.dtype) == ((_HEIGHT, _WIDTH, 1), np.float32)
+    ball_top = scene.physics.bind(scene.ball).xpos[2] + 0.1
+    assert depth[_HEIGHT // 2, _WIDTH // 2, 0] == pytest.approx(2.0 - ball_top, abs=0.02)
+
+
+def test_mjcf_camera_segmentation_labels_the_ball_geom(scene):
+    camera = observable.MJCFCamera(scene.camera, height=_HEIGHT, width=_WIDTH, segmentation=True)
+    labels = camera(scene.physics)
+    assert labels.shape == (_HEIGHT, _WIDTH, 2)
+    ball_id = scene.physics.bind(scene.ball).element_id
+    assert labels[_HEIGHT // 2, _WIDTH // 2, 0] == ball_id
+
+
+def test_mujoco_camera_by_name_matches_mjcf_camera(scene):
+    by_name = observable.MujocoCamera("top", height=_HEIGHT, width=_WIDTH)(scene.physics)
+    by_element = observable.MJCFCamera(scene.camera, height=_HEIGHT, width=_WIDTH)(scene.physics)
+    np.testing.assert_array_equal(by_name, by_element)
+
+
+def test_mujoco_camera_with_unknown_name_is_an_error(scene):
+    with pytest.raises(ValueError, match="'nowhere'"):
+        observable.MujocoCamera("nowhere")(scene.physics)
+
+
+def _enabled(obs):
+    obs.enabled = True
+    return obs
+
+
+@pytest.mark.parametrize("strip", [False, True])
+def test_spec_and_observation_agree_for_every_kind(scene, strip):
+    observables = {
+        "generic": _enabled(observable.Generic(lambda physics: physics.data.time)),
+        "mujoco_feature": _enabled(observable.MujocoFeature("xpos", "arm", buffer_size=2)),
+        "mjcf_feature": _enabled(observable.MJCFFeature("qpos", [scene.hinge, scene.slide])),
+        "mjcf_camera": _enabled(observable.MJCFCamera(scene.camera, height=8, width=12)),
+        "depth": _enabled(
+            observable.MJCFCamera(scene.camera, height=8, width=12, depth=True, buffer_size=2)
+        ),
+        "segmentation": _enabled(
+            observable.MujocoCamera("top", height=8, width=12, segmentation=True)
+        ),
+        "mean_of_feature": _enabled(
+            observable.MJCFFeature("xpos", scene.tip, buffer_size=3, aggregator="mean")
+        ),
+    }
+    obs_updater = updater.Updater(observables, 2, strip_singleton_buffer_dim=strip)
+    obs_updater.reset(scene.physics, np.random.RandomState(0))
+    specs = obs_updater.observation_spec()
+    obs_updater.prepare_for_next_control_step()
+    obs_updater.update()
+    obs_updater.update()
+    observation = obs_updater.get_observation()
+    assert list(specs) == list(observation) == list(observables)
+    for name, spec in specs.items():
+        spec.validate(observation[name])

@@ -1,0 +1,60 @@
+"""composer.Arena: default scene settings, free and offset attachment."""
+
+import numpy as np
+import pytest
+from composer_scene import Box
+
+import composer
+import mjcf
+
+
+class Planar(Box):
+    """A box that slides in x and y instead of moving freely."""
+
+    def create_root_joints(self, attachment_frame):
+        attachment_frame.add("joint", name="x", type="slide", axis=[1, 0, 0])
+        attachment_frame.add("joint", name="y", type="slide", axis=[0, 1, 0])
+
+
+def test_arena_compiles_with_its_name_and_a_2ms_timestep():
+    arena = composer.Arena(name="stage")
+    physics = mjcf.Physics.from_mjcf_model(arena.mjcf_model)
+    assert arena.mjcf_model.model == "stage"
+    assert physics.timestep() == 0.002
+
+
+def test_add_free_entity_gives_the_entity_six_degrees_of_freedom():
+    arena, box = composer.Arena(), Box()
+    frame = arena.add_free_entity(box)
+    physics = mjcf.Physics.from_mjcf_model(arena.mjcf_model)
+    assert frame is box.root_body
+    assert physics.model.nq == 7
+    assert physics.model.nv == 6
+
+
+def test_add_free_entity_uses_the_entitys_own_root_joints():
+    arena, box = composer.Arena(), Planar()
+    arena.add_free_entity(box)
+    physics = mjcf.Physics.from_mjcf_model(arena.mjcf_model)
+    assert physics.model.nq == 2
+    assert mjcf.get_freejoint(box.root_body) is None
+
+
+def test_attach_offset_with_position_places_the_entity():
+    arena, box = composer.Arena(), Box()
+    arena.attach_offset(box, [0.1, 0.2, 0.3])
+    physics = mjcf.Physics.from_mjcf_model(arena.mjcf_model)
+    np.testing.assert_allclose(physics.bind(box.geom).xpos, [0.1, 0.2, 0.3])
+
+
+def test_attach_offset_with_position_and_quaternion_orients_the_entity():
+    arena, box = composer.Arena(), Box()
+    quaternion = [np.cos(0.25), 0, 0, np.sin(0.25)]
+    arena.attach_offset(box, [0, 0, 1, *quaternion])
+    physics = mjcf.Physics.from_mjcf_model(arena.mjcf_model)
+    np.testing.assert_allclose(physics.bind(box.geom).xquat, quaternion)
+
+
+def test_attach_offset_with_wrong_number_of_values_is_an_error():
+    with pytest.raises(ValueError, match="3 values.*7.*got 4"):
+        composer.Arena().attach_offset(Box(), [0, 0, 0, 1])

@@ -1,0 +1,247 @@
+"""composer.Entity: the entity tree, poses, velocities and frames."""
+
+import mujoco
+import numpy as np
+import pytest
+from composer_scene import Arm, Box, Floor
+
+import composer
+import mjcf
+
+
+def _compiled(arena):
+    return mjcf.Physics.from_mjcf_model(arena.mjcf_model)
+
+
+def _quat_about_z(angle):
+    return np.array([np.cos(angle / 2), 0, 0, np.sin(angle / 2)])
+
+
+def test_constructor_passes_arguments_to_build():
+    box = Box(name="crate", half_size=0.2)
+    assert box.mjcf_model.model == "crate"
+    np.testing.assert_allclose(box.geom.size, [0.2, 0.2, 0.2])
+
+
+def test_observable_options_configure_observables_at_construction():
+    box = Box(observable_options={"position": {"enabled": True, "buffer_size": 3}})
+    assert box.observables.position.enabled
+    assert box.observables.position.buffer_size == 3
+    assert not box.observables.orientation.enabled
+
+
+def test_entity_without_build_cannot_be_instantiated():
+    class NoBuild(composer.Entity):
+        @property
+        def mjcf_model(self):
+            return None
+
+    with pytest.raises(TypeError, match="_build"):
+        NoBuild()
+
+
+def test_attach_returns_frame_and_sets_parent():
+    arena, arm = Floor(), Arm()
+    frame = arena.attach(arm)
+    assert arm.parent is arena
+    assert frame is mjcf.get_attachment_frame(arm.mjcf_model)
+    assert arena.mjcf_model.find("site", "arm/tip") is arm.tip
+
+
+def test_attach_to_named_site_puts_child_under_that_site():
+    arm, box = Arm(), Box()
+    arm.attach(box, attach_site="tip")
+    assert mjcf.get_attachment_frame(box.mjcf_model).parent is arm.tip.parent
+
+
+def test_attach_to_missing_site_names_the_site():
+    arm, box = Arm(), Box()
+    with pytest.raises(ValueError, match="'wrist'"):
+        arm.attach(box, attach_site="wrist")
+
+
+def test_attach_entity_that_already_has_a_parent_is_an_error():
+    first, second, box = Floor(), Floor(name="other"), Box()
+    first.attach(box)
+    with pytest.raises(ValueError, match="already attached"):
+        second.attach(box)
+
+
+def test_attach_entity_to_itself_is_an_error():
+    arena = Floor()
+    with pytest.raises(ValueError, match="itself"):
+        arena.attach(arena)
+
+
+def test_iter_entities_is_depth_first_in_attachment_order():
+    arena, arm, box, other = Floor(), Arm(), Box(), Box(name="other")
+    arena.attach(arm)
+    arm.attach(box, attach_site="tip")
+    arena.attach(other)
+    assert list(arena.iter_entities()) == [arena, arm, box, other]
+    assert list(arena.iter_entities(exclude_self=True)) == [arm, box, other]
+
+
+def test_detach_removes_entity_and_its_model():
+    arena, box = Floor(), Box()
+    arena.attach(box)
+    box.detach()
+    assert box.parent is None
+    assert list(arena.iter_entities()) == [arena]
+    assert arena.mjcf_model.find("geom", "box/geom") is None
+
+
+def test_detach_unattached_entity_is_an_error():
+    with pytest.raises(RuntimeError, match="not attached"):
+        Box().detach()
+
+
+def test_root_body_is_worldbody_when_unattached_and_frame_when_attached():
+    arena, box = Floor(), Box()
+    assert box.root_body is box.mjcf_model.worldbody
+    frame = arena.attach(box)
+    assert box.root_body is frame
+
+
+def test_create_root_joints_adds_a_free_joint():
+    arena, box = Floor(), Box()
+    frame = arena.attach(box)
+    box.create_root_joints(frame)
+    assert mjcf.get_freejoint(box.root_body) is not None
+
+
+def test_set_pose_of_free_entity_writes_its_joint_qpos():
+    arena, box = Floor(), Box()
+    arena.add_free_entity(box)
+    physics = _compiled(arena)
+    box.set_pose(physics, position=[0.1, 0.2, 0.3], quaternion=_quat_about_z(0.5))
+    physics.forward()
+    np.testing.assert_allclose(physics.bind(box.root_body).xpos, [0.1, 0.2, 0.3])
+    np.testing.assert_allclose(physics.bind(box.root_body).xquat, _quat_about_z(0.5))
+
+
+def test_get_pose_of_free_entity_reads_its_joint_qpos():
+    arena, box = Floor(), Box()
+    arena.add_free_entity(box)
+    physics = _compiled(arena)
+    physics.bind(mjcf.get_freejoint(box.root_body)).qpos = [1, 2, 3, 0, 1, 0, 0]
+    position, quaternion = box.get_pose(physics)
+    np.testing.assert_allclose(position, [1, 2, 3])
+    np.testing.assert_allclose(quaternion, [0, 1, 0, 0])
+
+
+def test_set_pose_of_fixed_entity_moves_its_frame_and_normalises_quaternion():
+    arena, box = Floor(), Box()
+    arena.attach(box)
+    physics = _compiled(arena)
+    box.set_pose(physics, position=[0.5, 0, 0.25], quaternion=[2, 0, 0, 0])
+    physics.forward()
+    np.testing.assert_allclose(physics.bind(box.geom).xpos, [0.5, 0, 0.25])
+    position, quaternion = box.get_pose(physics)
+    np.testing.assert_allclose(position, [0.5, 0, 0.25])
+    np.testing.assert_allclose(quaternion, [1, 0, 0, 0])
+
+
+def test_pose_of_unattached_entity_is_an_error():
+    box = Box()
+    physics = mjcf.Physics.from_mjcf_model(box.mjcf_model)
+    with pytest.raises(RuntimeError, match="not attached"):
+        box.get_pose(physics)
+
+
+def test_shift_pose_adds_position_and_premultiplies_quaternion():
+    arena, box = Floor(), Box()
+    arena.add_free_entity(box)
+    physics = _compiled(arena)
+    box.set_pose(physics, position=[1, 0, 0], quaternion=_quat_about_z(0.25))
+    box.shift_pose(physics, position=[0, 1, 0], quaternion=_quat_about_z(0.5))
+    position, quaternion = box.get_pose(physics)
+    np.testing.assert_allclose(position, [1, 1, 0])
+    np.testing.assert_allclose(quaternion, _quat_about_z(0.75))
+
+
+def test_shift_pose_with_rotate_velocity_rotates_linear_velocity():
+    arena, box = Floor(), Box()
+    arena.add_free_entity(box)
+    physics = _compiled(arena)
+    box.set_velocity(physics, velocity=[1, 0, 0], angular_velocity=[0, 0, 2])
+    box.shift_pose(physics, quaternion=_quat_about_z(np.pi / 2), rotate_velocity=True)
+    linear, angular = box.get_velocity(physics)
+    np.testing.assert_allclose(linear, [0, 1, 0], atol=1e-12)
+    np.testing.assert_allclose(angular, [0, 0, 2])
+
+
+def test_set_velocity_then_get_velocity_round_trips():
+    arena, box = Floor(), Box()
+    arena.add_free_entity(box)
+    physics = _compiled(arena)
+    box.set_velocity(physics, velocity=[1, 2, 3], angular_velocity=[4, 5, 6])
+    linear, angular = box.get_velocity(physics)
+    np.testing.assert_allclose(linear, [1, 2, 3])
+    np.testing.assert_allclose(angular, [4, 5, 6])
+
+
+def test_get_velocity_of_entity_without_free_joint_is_an_error():
+    arena, box = Floor(), Box()
+    arena.attach(box)
+    physics = _compiled(arena)
+    with pytest.raises(ValueError, match="no free joint"):
+        box.get_velocity(physics)
+
+
+def test_global_vector_to_local_frame_undoes_the_entity_rotation():
+    arena, box = Floor(), Box()
+    arena.add_free_entity(box)
+    physics = _compiled(arena)
+    box.set_pose(physics, quaternion=_quat_about_z(np.pi / 2))
+    physics.forward()
+    local = box.global_vector_to_local_frame(physics, np.array([1.0, 0, 0]))
+    np.testing.assert_allclose(local, [0, -1, 0], atol=1e-12)
+    local_2d = box.global_vector_to_local_frame(physics, np.array([[0.0, 1], [1, 0]]))
+    np.testing.assert_allclose(local_2d, [[1, 0], [0, -1]], atol=1e-12)
+
+
+def test_global_vector_to_local_frame_rejects_other_sizes():
+    arena, box = Floor(), Box()
+    arena.add_free_entity(box)
+    physics = _compiled(arena)
+    with pytest.raises(ValueError, match="size 2 or 3"):
+        box.global_vector_to_local_frame(physics, np.zeros(4))
+
+
+def test_global_xmat_to_local_frame_expresses_rotation_relative_to_entity():
+    arena, box = Floor(), Box()
+    arena.add_free_entity(box)
+    physics = _compiled(arena)
+    box.set_pose(physics, quaternion=_quat_about_z(0.3))
+    physics.forward()
+    world = np.empty(9)
+    mujoco.mju_quat2Mat(world, _quat_about_z(0.8))
+    expected = np.empty(9)
+    mujoco.mju_quat2Mat(expected, _quat_about_z(0.5))
+    np.testing.assert_allclose(box.global_xmat_to_local_frame(physics, world), expected, atol=1e-12)
+
+
+def test_model_wrapper_entity_wraps_an_existing_model():
+    model = mjcf.RootElement(model="thing")
+    entity = composer.ModelWrapperEntity(model)
+    assert entity.mjcf_model is model
+    assert list(entity.observables.as_dict()) == []
+
+
+def test_free_prop_observables_report_pose_and_velocity_of_the_body():
+    arena, box = Floor(), Box()
+    arena.add_free_entity(box)
+    physics = _compiled(arena)
+    box.set_pose(physics, position=[0.1, 0.2, 0.3], quaternion=_quat_about_z(0.4))
+    box.set_velocity(physics, velocity=[0.5, 0, 0], angular_velocity=[0, 0, 1.5])
+    physics.forward()
+    random_state = np.random.RandomState(0)
+
+    def value(name):
+        return getattr(box.observables, name).observation_callable(physics, random_state)()
+
+    np.testing.assert_allclose(value("position"), [0.1, 0.2, 0.3])
+    np.testing.assert_allclose(value("orientation"), _quat_about_z(0.4))
+    np.testing.assert_allclose(value("linear_velocity"), [0.5, 0, 0], atol=1e-12)
+    np.testing.assert_allclose(value("angular_velocity"), [0, 0, 1.5], atol=1e-12)

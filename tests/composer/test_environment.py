@@ -1,0 +1,255 @@
+"""composer.Environment: the dm_env loop, specs, time limits and action checking."""
+
+import weakref
+
+import dm_env
+import numpy as np
+import pytest
+from composer_scene import ReachTask
+from dm_env import specs
+
+import composer
+import mjcf
+
+
+class EndsWhenBoxIsHigh(ReachTask):
+    """Terminates once the box is above 1 m."""
+
+    def should_terminate_episode(self, physics):
+        return physics.bind(self.box.root_body).xpos[2] > 1.0
+
+
+class CustomSpecs(ReachTask):
+    def get_reward_spec(self):
+        return specs.Array(shape=(2,), dtype=np.float32, name="reward")
+
+    def get_discount_spec(self):
+        return specs.BoundedArray(shape=(), dtype=np.float32, minimum=0, maximum=1)
+
+
+def test_reset_returns_first_timestep_with_enabled_observations():
+    env = composer.Environment(ReachTask(), random_state=0)
+    timestep = env.reset()
+    assert timestep.step_type == dm_env.StepType.FIRST
+    assert timestep.reward is None and timestep.discount is None
+    assert list(timestep.observation) == ["arm/joint_positions", "arm/tip_position", "box/position"]
+
+
+def test_step_returns_mid_with_the_tasks_reward_and_discount():
+    task = ReachTask(discount=0.9)
+    env = composer.Environment(task, random_state=0)
+    env.reset()
+    timestep = env.step(np.zeros(2))
+    assert timestep.step_type == dm_env.StepType.MID
+    assert timestep.reward == task.get_reward(env.physics)
+    assert timestep.discount == 0.9
+
+
+def test_observations_describe_the_physics_after_the_step():
+    task = ReachTask()
+    env = composer.Environment(task, random_state=0)
+    env.reset()
+    observation = env.step(np.array([1.0, -1.0])).observation
+    np.testing.assert_array_equal(
+        observation["arm/tip_position"][0], env.physics.bind(task.arm.tip).xpos
+    )
+    np.testing.assert_array_equal(
+        observation["arm/joint_positions"][0], env.physics.bind(task.arm.joints).qpos
+    )
+
+
+def test_one_step_advances_physics_by_the_control_timestep():
+    env = composer.Environment(ReachTask())
+    env.reset()
+    env.step(np.zeros(2))
+    assert env.physics.time() == pytest.approx(0.02)
+    assert env.control_timestep() == 0.02
+
+
+def test_n_sub_steps_overrides_the_tasks_physics_steps_per_control_step():
+    env = composer.Environment(ReachTask(), n_sub_steps=3)
+    env.reset()
+    env.step(np.zeros(2))
+    assert env.physics.time() == pytest.approx(0.006)
+    assert env.control_timestep() == pytest.approx(0.006)
+
+
+def test_action_is_written_into_the_actuator_controls():
+    task = ReachTask()
+    env = composer.Environment(task)
+    env.reset()
+    env.step([0.5, -0.25])
+    np.testing.assert_array_equal(env.physics.bind(task.arm.actuators).ctrl, [0.5, -0.25])
+
+
+def test_step_before_first_reset_resets():
+    env = composer.Environment(ReachTask())
+    assert env.step(np.zeros(2)).step_type == dm_env.StepType.FIRST
+
+
+def test_time_limit_ends_episode_with_the_tasks_discount():
+    env = composer.Environment(ReachTask(discount=0.5), time_limit=0.09)
+    env.reset()
+    step_types = [env.step(np.zeros(2)) for _ in range(5)]
+    assert [t.step_type for t in step_types] == [dm_env.StepType.MID] * 4 + [dm_env.StepType.LAST]
+    assert step_types[-1].discount == 0.5
+    assert env.physics.time() >= 0.09
+
+
+def test_task_termination_ends_episode():
+    task = EndsWhenBoxIsHigh()
+    env = composer.Environment(task)
+    env.reset()
+    assert env.step(np.zeros(2)).step_type == dm_env.StepType.MID
+    task.box.set_pose(env.physics, position=[0, 0, 3])
+    assert env.step(np.zeros(2)).last()
+
+
+def test_step_after_last_starts_new_episode():
+    env = composer.Environment(ReachTask(), time_limit=0.015)
+    env.reset()
+    assert env.step(np.zeros(2)).last()
+    timestep = env.step(np.zeros(2))
+    assert timestep.first()
+    assert env.physics.time() == 0.0
+    assert env.step(np.zeros(2)).last()
+
+
+def test_action_spec_describes_the_actuators():
+    env = composer.Environment(ReachTask())
+    spec = env.action_spec()
+    assert spec.shape == (2,)
+    np.testing.assert_array_equal(spec.minimum, [-1, -1])
+    assert spec.name == "arm/shoulder_motor\tarm/elbow_motor"
+
+
+def test_observation_spec_matches_observations_before_and_after_reset():
+    env = composer.Environment(ReachTask())
+    spec = env.observation_spec()
+    observation = env.reset().observation
+    assert list(spec) == list(observation)
+    for name, value in observation.items():
+        spec[name].validate(value)
+    assert spec["arm/tip_position"].shape == (1, 3)
+
+
+def test_strip_singleton_obs_buffer_dim_removes_the_buffer_axis():
+    env = composer.Environment(ReachTask(), strip_singleton_obs_buffer_dim=True)
+    assert env.observation_spec()["arm/tip_position"].shape == (3,)
+    assert env.reset().observation["arm/tip_position"].shape == (3,)
+
+
+def test_reward_and_discount_specs_default_to_dm_env_scalars():
+    env = composer.Environment(ReachTask())
+    assert env.reward_spec() == specs.Array(shape=(), dtype=float, name="reward")
+    assert env.discount_spec().maximum == 1.0
+
+
+def test_reward_and_discount_specs_come_from_the_task_when_it_defines_them():
+    env = composer.Environment(CustomSpecs())
+    assert env.reward_spec().shape == (2,)
+    assert env.discount_spec().dtype == np.float32
+
+
+def test_physics_property_is_a_weak_proxy():
+    env = composer.Environment(ReachTask())
+    assert isinstance(env.physics, weakref.ProxyType)
+
+
+def test_task_and_random_state_properties():
+    task = ReachTask()
+    random_state = np.random.RandomState(4)
+    env = composer.Environment(task, random_state=random_state)
+    assert env.task is task
+    assert env.random_state is random_state
+
+
+def test_integer_seed_makes_episodes_reproducible():
+    first = composer.Environment(ReachTask(), random_state=7).reset().observation
+    second = composer.Environment(ReachTask(), random_state=7).reset().observation
+    np.testing.assert_array_equal(first["box/position"], second["box/position"])
+
+
+@pytest.mark.parametrize(
+    ("action", "got"),
+    [
+        (np.zeros(3), r"shape \(3,\)"),
+        (np.zeros((1, 2)), r"shape \(1, 2\)"),
+        ([np.nan, 0.0], "non-finite"),
+        ([np.inf, 0.0], "non-finite"),
+        (["left", "right"], "cannot be cast"),
+    ],
+)
+def test_bad_action_is_rejected_naming_the_spec_before_stepping(action, got):
+    env = composer.Environment(ReachTask())
+    env.reset()
+    with pytest.raises(ValueError, match=got) as error:
+        env.step(action)
+    message = str(error.value)
+    assert "expected shape (2,)" in message
+    assert "arm/shoulder_motor, arm/elbow_motor" in message
+    assert "[-1. -1.]" in message
+    assert env.physics.time() == 0.0
+
+
+def test_huge_but_finite_action_is_accepted():
+    env = composer.Environment(ReachTask())
+    env.reset()
+    assert env.step(np.full(2, 1e200)).mid()
+
+
+@pytest.mark.parametrize(
+    ("kwargs", "message"),
+    [
+        ({"max_reset_attempts": 0}, "max_reset_attempts: expected an integer >= 1, got 0"),
+        ({"n_sub_steps": 2.5}, "n_sub_steps: expected an integer >= 1, got 2.5"),
+        ({"time_limit": -1.0}, "time_limit: expected a number of seconds >= 0"),
+        ({"delayed_observation_padding": 0}, "delayed_observation_padding: expected"),
+    ],
+)
+def test_bad_constructor_arguments_are_named(kwargs, message):
+    with pytest.raises(ValueError, match=message):
+        composer.Environment(ReachTask(), **kwargs)
+
+
+def test_close_frees_the_physics():
+    env = composer.Environment(ReachTask())
+    env.reset()
+    proxy = env.physics
+    env.close()
+    with pytest.raises(ReferenceError):
+        proxy.time()
+
+
+def _configured_env(substep_hook):
+    task = ReachTask()
+    task.arm.observables.joint_positions.configure(buffer_size=4, update_interval=3, delay=2)
+    task.box.observables.position.configure(buffer_size=3, aggregator="mean")
+    task.arm.observables.tip_position.configure(update_interval=4)
+    env = composer.Environment(task, random_state=2)
+    if substep_hook:
+        env.add_extra_hook("after_substep", lambda physics, random_state: physics.time())
+    return env
+
+
+def test_stepping_in_chunks_observes_exactly_what_substep_by_substep_stepping_does():
+    chunked, one_by_one = _configured_env(False), _configured_env(True)
+    actions = np.random.RandomState(0).uniform(-1, 1, size=(6, 2))
+    for first, second in [(chunked.reset(), one_by_one.reset())] + [
+        (chunked.step(action), one_by_one.step(action)) for action in actions
+    ]:
+        assert first.reward == second.reward
+        for name in first.observation:
+            np.testing.assert_array_equal(first.observation[name], second.observation[name])
+
+
+def test_default_observables_step_the_physics_in_one_call_per_control_step(monkeypatch):
+    env = composer.Environment(ReachTask())
+    env.reset()
+    calls = []
+    original = mjcf.Physics.step
+    monkeypatch.setattr(
+        mjcf.Physics, "step", lambda self, nstep=1: calls.append(nstep) or original(self, nstep)
+    )
+    env.step(np.zeros(2))
+    assert calls == [10]
