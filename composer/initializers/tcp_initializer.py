@@ -1,0 +1,190 @@
+"""ToolCenterPointInitializer: puts a hand's tool-centre point at a sampled pose by IK."""
+
+from __future__ import annotations
+
+import mujoco
+import numpy as np
+
+from composer import initializer
+from composer.environment import EpisodeInitializationError
+from composer.initializers import _kinematic_tree
+from composer.utils import inverse_kinematics
+from composer.variation import base
+
+# Orientation of a tool-centre point pointing straight down (its z axis along world -z).
+DOWN_QUATERNION = np.array([0.0, np.sqrt(0.5), np.sqrt(0.5), 0.0])
+
+# Weight of the orientation error (radians) relative to the position error (metres) in IK.
+_IK_ROT_WEIGHT = 2.0
+
+_SCALAR_JOINTS = (int(mujoco.mjtJoint.mjJNT_HINGE), int(mujoco.mjtJoint.mjJNT_SLIDE))
+
+# Geom groups, and which pairs of them make a contact count as a collision: the arm with the
+# arm, the hand or static geometry; the hand with the arm or static geometry (not with
+# itself). Free-floating bodies (props) are in no group, so touching them is allowed.
+_ARM, _HAND, _STATIC = 0, 1, 2
+_RELEVANT = np.array(
+    [
+        [True, True, True],
+        [True, False, True],
+        [True, True, False],
+    ]
+)
+
+
+class ToolCenterPointInitializer(initializer.Initializer):
+    """Moves an arm's joints so that the hand's tool-centre point reaches a sampled pose.
+
+    For each sampled target pose, inverse kinematics is tried up to `max_ik_attempts` times,
+    from the current joint configuration first and then from random ones within the joint
+    ranges. A solution is rejected if a joint cannot be brought within its range or, unless
+    `ignore_collisions`, if it creates a relevant collision: between two arm geoms, between
+    the arm and the hand, or between the arm or hand and anything that is not free-floating
+    (so touching a free prop is allowed).
+    """
+
+    def __init__(
+        self,
+        hand,
+        arm,
+        position,
+        quaternion=DOWN_QUATERNION,
+        ignore_collisions: bool = False,
+        max_ik_attempts: int = 10,
+        max_rejection_samples: int = 10,
+    ):
+        """Initializes this ToolCenterPointInitializer.
+
+        Args:
+          hand: The hand entity whose `tool_center_point` site is placed, or None to place the
+            arm's `wrist_site`.
+          arm: The arm entity; its `joints` (a sequence of MJCF joints) are moved.
+          position: A Cartesian position (3,) or a variation producing one.
+          quaternion: A unit quaternion (w, x, y, z) or a variation producing one.
+          ignore_collisions: If True, any IK solution is accepted.
+          max_ik_attempts: IK attempts per sampled pose.
+          max_rejection_samples: Target poses sampled before giving up.
+        """
+        if max_ik_attempts < 1 or max_rejection_samples < 1:
+            raise ValueError(
+                "ToolCenterPointInitializer: max_ik_attempts and max_rejection_samples must be "
+                f">= 1, got {max_ik_attempts} and {max_rejection_samples}"
+            )
+        self._hand = hand
+        self._arm = arm
+        self._position = position
+        self._quaternion = quaternion
+        self._ignore_collisions = ignore_collisions
+        self._max_ik_attempts = max_ik_attempts
+        self._max_rejection_samples = max_rejection_samples
+
+    def initialize_episode(self, physics, random_state) -> None:
+        """Sets the arm's joints (see the class docstring)."""
+        self(physics, random_state)
+
+    def __call__(self, physics, random_state) -> None:
+        """Sets the arm's joints so that the tool-centre point is at a sampled pose.
+
+        Raises:
+          EpisodeInitializationError: If no sampled pose had an acceptable IK solution.
+        """
+        site = self._hand.tool_center_point if self._hand is not None else self._arm.wrist_site
+        joint_names = [joint.full_identifier for joint in self._arm.joints]
+        data = physics.data.ptr
+        joints = _ArmJoints(physics.model.ptr, joint_names)
+        geom_groups = self._geom_groups(physics.model.ptr)
+        initial_qpos = data.qpos[joints.qpos].copy()
+
+        for _ in range(self._max_rejection_samples):
+            target_pos = base.evaluate(self._position, random_state=random_state)
+            target_quat = base.evaluate(self._quaternion, random_state=random_state)
+            for attempt in range(self._max_ik_attempts):
+                if attempt > 0:
+                    joints.randomize(data.qpos, random_state)
+                result = inverse_kinematics.qpos_from_site_pose(
+                    physics,
+                    site.full_identifier,
+                    target_pos=target_pos,
+                    target_quat=target_quat,
+                    joint_names=joint_names,
+                    rot_weight=_IK_ROT_WEIGHT,
+                    inplace=True,
+                )
+                if not result.success or not joints.bring_into_range(data.qpos):
+                    continue
+                physics.forward()
+                if self._ignore_collisions or not _has_relevant_collision(data, geom_groups):
+                    return
+            data.qpos[joints.qpos] = initial_qpos
+        physics.forward()
+        raise EpisodeInitializationError(
+            f"ToolCenterPointInitializer: no collision-free IK solution for "
+            f"{site.full_identifier!r} after {self._max_rejection_samples} sampled poses with "
+            f"up to {self._max_ik_attempts} IK attempts each"
+        )
+
+    def _geom_groups(self, model: mujoco.MjModel) -> np.ndarray:
+        """Returns each geom's group: _ARM, _HAND, _STATIC, or -1 for free-floating bodies."""
+        arm_bodies = _kinematic_tree.entity_body_mask(model, self._arm)
+        hand_bodies = np.zeros(model.nbody, dtype=bool)
+        if self._hand is not None:
+            hand_bodies = _kinematic_tree.entity_body_mask(model, self._hand)
+        free_roots = model.jnt_bodyid[model.jnt_type == int(mujoco.mjtJoint.mjJNT_FREE)]
+        free_bodies = np.isin(model.body_rootid, free_roots)
+        geom_bodies = model.geom_bodyid
+        groups = np.full(model.ngeom, -1)
+        groups[~free_bodies[geom_bodies]] = _STATIC
+        groups[arm_bodies[geom_bodies]] = _ARM
+        groups[hand_bodies[geom_bodies]] = _HAND
+        return groups
+
+
+def _has_relevant_collision(data: mujoco.MjData, geom_groups: np.ndarray) -> bool:
+    geom1, geom2 = _kinematic_tree.penetrating_geom_pairs(data)
+    group1, group2 = geom_groups[geom1], geom_groups[geom2]
+    known = (group1 >= 0) & (group2 >= 0)
+    return bool(np.any(_RELEVANT[group1[known], group2[known]]))
+
+
+class _ArmJoints:
+    """The arm's scalar (hinge or slide) joints: their qpos indices, types and ranges."""
+
+    def __init__(self, model: mujoco.MjModel, names: list[str]):
+        ids = []
+        for name in names:
+            joint_id = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_JOINT, name)
+            if joint_id < 0:
+                raise ValueError(
+                    f"ToolCenterPointInitializer: arm joint {name!r} is not in the model"
+                )
+            if model.jnt_type[joint_id] not in _SCALAR_JOINTS:
+                raise ValueError(
+                    f"ToolCenterPointInitializer: arm joint {name!r} must be a hinge or slide joint"
+                )
+            ids.append(joint_id)
+        self.qpos = model.jnt_qposadr[ids]
+        self.hinge = model.jnt_type[ids] == int(mujoco.mjtJoint.mjJNT_HINGE)
+        self.limited = model.jnt_limited[ids].astype(bool)
+        self.low, self.high = model.jnt_range[ids].T
+
+    def randomize(self, qpos: np.ndarray, random_state) -> None:
+        """Sets random positions: uniform in range, or in [-pi, pi) for unlimited hinges."""
+        sampled = random_state.uniform(
+            np.where(self.limited, self.low, -np.pi), np.where(self.limited, self.high, np.pi)
+        )
+        keep = ~self.limited & ~self.hinge  # unlimited slides keep their position
+        qpos[self.qpos] = np.where(keep, qpos[self.qpos], sampled)
+
+    def bring_into_range(self, qpos: np.ndarray) -> bool:
+        """Shifts hinge angles by multiples of 2*pi into their ranges (unlimited ones into
+        [-pi, pi)); returns False, changing nothing, if some joint cannot be in range."""
+        values = qpos[self.qpos]
+        two_pi = 2.0 * np.pi
+        wrapped = np.where(
+            self.limited, self.low + (values - self.low) % two_pi, (values + np.pi) % two_pi - np.pi
+        )
+        values = np.where(self.hinge, wrapped, values)
+        if np.any(self.limited & ((values < self.low) | (values > self.high))):
+            return False
+        qpos[self.qpos] = values
+        return True

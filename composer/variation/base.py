@@ -1,0 +1,142 @@
+"""The `Variation` protocol: lazily evaluated values, their arithmetic, and `evaluate`."""
+
+from __future__ import annotations
+
+import abc
+import operator
+
+import numpy as np
+
+
+class Variation(abc.ABC):
+    """A value that is re-sampled or recomputed each time it is called.
+
+    Calling a variation returns a new value. Arithmetic (`+ - * / // **`, unary minus) with
+    numbers, arrays or other variations, and indexing, return new variations that evaluate
+    their operands (with the same arguments) each time they are called.
+    """
+
+    @abc.abstractmethod
+    def __call__(self, initial_value=None, current_value=None, random_state=None):
+        """Returns the next value.
+
+        Args:
+          initial_value: The original value of the quantity being varied; relative
+            variations (noises) apply to it, absolute ones may ignore it. Distributions draw
+            samples of its shape.
+          current_value: The value the quantity has now (used by cumulative variations).
+          random_state: A `np.random.RandomState`; None means NumPy's global random state.
+        """
+
+    def __add__(self, other):
+        return _BinaryOperation(operator.add, self, other)
+
+    def __radd__(self, other):
+        return _BinaryOperation(operator.add, other, self)
+
+    def __sub__(self, other):
+        return _BinaryOperation(operator.sub, self, other)
+
+    def __rsub__(self, other):
+        return _BinaryOperation(operator.sub, other, self)
+
+    def __mul__(self, other):
+        return _BinaryOperation(operator.mul, self, other)
+
+    def __rmul__(self, other):
+        return _BinaryOperation(operator.mul, other, self)
+
+    def __truediv__(self, other):
+        return _BinaryOperation(operator.truediv, self, other)
+
+    def __rtruediv__(self, other):
+        return _BinaryOperation(operator.truediv, other, self)
+
+    def __floordiv__(self, other):
+        return _BinaryOperation(operator.floordiv, self, other)
+
+    def __rfloordiv__(self, other):
+        return _BinaryOperation(operator.floordiv, other, self)
+
+    def __pow__(self, other):
+        return _BinaryOperation(operator.pow, self, other)
+
+    def __rpow__(self, other):
+        return _BinaryOperation(operator.pow, other, self)
+
+    def __neg__(self):
+        return _UnaryOperation(operator.neg, self)
+
+    def __getitem__(self, index):
+        return _GetItemOperation(self, index)
+
+
+def evaluate(structure, *args, **kwargs):
+    """Returns `structure` with every `Variation` inside it replaced by its value.
+
+    Lists, tuples (including namedtuples) and dicts are traversed recursively; everything else
+    (numbers, arrays, strings, ...) is returned unchanged. `args` and `kwargs` are passed to
+    each variation: `(initial_value, current_value, random_state)`.
+    """
+    if isinstance(structure, Variation):
+        return structure(*args, **kwargs)
+    kind = type(structure)
+    if kind is list:
+        return [evaluate(item, *args, **kwargs) for item in structure]
+    if kind is tuple:
+        return tuple(evaluate(item, *args, **kwargs) for item in structure)
+    if kind is dict:
+        return {key: evaluate(value, *args, **kwargs) for key, value in structure.items()}
+    if isinstance(structure, tuple) and hasattr(structure, "_fields"):
+        return kind(*(evaluate(item, *args, **kwargs) for item in structure))
+    if isinstance(structure, (list, tuple)):
+        return kind(evaluate(item, *args, **kwargs) for item in structure)
+    if isinstance(structure, dict):
+        return kind((key, evaluate(value, *args, **kwargs)) for key, value in structure.items())
+    return structure
+
+
+class _UnaryOperation(Variation):
+    """`op(variation)`, evaluated lazily."""
+
+    def __init__(self, op, variation):
+        self._op = op
+        self._variation = variation
+
+    def __call__(self, initial_value=None, current_value=None, random_state=None):
+        return self._op(evaluate(self._variation, initial_value, current_value, random_state))
+
+    def __repr__(self):
+        return f"{self._op.__name__}({self._variation!r})"
+
+
+class _BinaryOperation(Variation):
+    """`op(first, second)` where either operand may be a variation, evaluated lazily."""
+
+    def __init__(self, op, first, second):
+        self._op = op
+        self._first = first
+        self._second = second
+
+    def __call__(self, initial_value=None, current_value=None, random_state=None):
+        first = evaluate(self._first, initial_value, current_value, random_state)
+        second = evaluate(self._second, initial_value, current_value, random_state)
+        return self._op(first, second)
+
+    def __repr__(self):
+        return f"{self._op.__name__}({self._first!r}, {self._second!r})"
+
+
+class _GetItemOperation(Variation):
+    """`variation[index]`, evaluated lazily."""
+
+    def __init__(self, variation, index):
+        self._variation = variation
+        self._index = index
+
+    def __call__(self, initial_value=None, current_value=None, random_state=None):
+        value = evaluate(self._variation, initial_value, current_value, random_state)
+        return np.asarray(value)[self._index]
+
+    def __repr__(self):
+        return f"{self._variation!r}[{self._index!r}]"

@@ -1,0 +1,39 @@
+"""Variations that perturb an existing value: additive and multiplicative noise."""
+
+from __future__ import annotations
+
+from composer.variation import base
+
+
+class _Noise(base.Variation):
+    def __init__(self, variation, cumulative: bool = False):
+        self._variation = variation
+        self._cumulative = cumulative
+
+    def _base_value(self, initial_value, current_value):
+        value = current_value if self._cumulative else initial_value
+        if value is None:
+            which = "current_value" if self._cumulative else "initial_value"
+            raise ValueError(
+                f"{type(self).__name__}(cumulative={self._cumulative}) needs a {which} to perturb"
+            )
+        return value
+
+    def __repr__(self):
+        return f"{type(self).__name__}({self._variation!r}, cumulative={self._cumulative})"
+
+
+class Additive(_Noise):
+    """Adds the value of `variation` to the initial value (to the current one if `cumulative`)."""
+
+    def __call__(self, initial_value=None, current_value=None, random_state=None):
+        value = self._base_value(initial_value, current_value)
+        return value + base.evaluate(self._variation, initial_value, current_value, random_state)
+
+
+class Multiplicative(_Noise):
+    """Multiplies the initial value (the current one if `cumulative`) by `variation`'s value."""
+
+    def __call__(self, initial_value=None, current_value=None, random_state=None):
+        value = self._base_value(initial_value, current_value)
+        return value * base.evaluate(self._variation, initial_value, current_value, random_state)
