@@ -14,6 +14,7 @@ from composer import observation
 from composer.action_validation import ActionValidator
 from composer.hooks import HOOK_NAMES, EnvironmentHooks
 from composer.model_snapshot import ModelSnapshot, snapshots_supported
+from mjcf.physics import compile_mjcf_model
 
 __all__ = [
     "HOOK_NAMES",
@@ -199,11 +200,10 @@ class Environment(dm_env.Environment):
         model in place and the current Physics, its data and bindings are kept.
         """
         root = self._task.root_entity.mjcf_model
-        physics = mjcf.Physics.from_mjcf_model(root)
+        model = compile_mjcf_model(root)
         self._compiled_modification_count = root.modification_count
-        if self._snapshot is not None and self._snapshot.load(physics.model.ptr):
-            physics.free()
-        else:
+        if self._snapshot is None or not self._snapshot.load(model):
+            physics = mjcf.Physics.from_compiled_mjcf_model(root, model)
             if self._physics is not None:
                 self._physics.free()
             physics.legacy_step = self._legacy_step

@@ -26,6 +26,16 @@ _XML_NAME = re.compile(r"""\bname=["']([^"']*)["']""")
 _MAX_QUOTED_XML = 500
 
 
+def _log_mujoco_warning(message: str) -> None:
+    logging.warning("MuJoCo warning: %s", message)
+
+
+# MuJoCo's default handler appends warnings to MUJOCO_LOG.TXT in the working directory;
+# route them to logging instead, unless the user installed a handler of their own.
+if mujoco.get_mju_user_warning() is None:
+    mujoco.set_mju_user_warning(_log_mujoco_warning)
+
+
 class PhysicsError(RuntimeError):
     """Raised when the simulation diverges (MuJoCo warnings such as bad qacc)."""
 
@@ -140,13 +150,19 @@ class Physics:
           ValueError: when MuJoCo rejects the model; the message names the offending
             element and quotes its XML where MuJoCo's message identifies it.
         """
+        return cls.from_compiled_mjcf_model(mjcf_model, compile_mjcf_model(mjcf_model))
+
+    @classmethod
+    def from_compiled_mjcf_model(cls, mjcf_model, model: mujoco.MjModel) -> "Physics":
+        """A Physics for ``model``, already compiled from ``mjcf_model`` (see
+        ``compile_mjcf_model``), so that ``bind`` accepts the elements of ``mjcf_model``."""
         physics = cls.__new__(cls)
-        physics._initialize(mujoco.MjData(_compile(mjcf_model)), mjcf_model)
+        physics._initialize(mujoco.MjData(model), mjcf_model)
         return physics
 
     def reload_from_mjcf_model(self, mjcf_model) -> None:
         """Recompiles this Physics from ``mjcf_model``, as ``from_mjcf_model`` would."""
-        data = mujoco.MjData(_compile(mjcf_model))
+        data = mujoco.MjData(compile_mjcf_model(mjcf_model))
         self._close_renderers()
         self._initialize(data, mjcf_model)
 
@@ -433,8 +449,12 @@ class Physics:
         )
 
 
-def _compile(mjcf_model) -> mujoco.MjModel:
-    """Compiles an mjcf root; re-raises MuJoCo errors naming the offending element."""
+def compile_mjcf_model(mjcf_model) -> mujoco.MjModel:
+    """Compiles an ``mjcf.RootElement`` into a ``mujoco.MjModel``.
+
+    Raises:
+      ValueError: when MuJoCo rejects the model, naming the offending element.
+    """
     xml_string = mjcf_model.to_xml_string()
     try:
         return mujoco.MjModel.from_xml_string(xml_string, mjcf_model.get_assets())

@@ -3,22 +3,12 @@
 import logging
 
 import dm_env
-import mujoco
 import numpy as np
 import pytest
 from composer_scene import ReachTask
 
 import composer
 import mjcf
-
-
-@pytest.fixture(autouse=True)
-def _mujoco_warnings_not_written_to_log_file():
-    """MuJoCo prints and appends its warnings to MUJOCO_LOG.TXT unless a handler is set."""
-    previous = mujoco.get_mju_user_warning()
-    mujoco.set_mju_user_warning(lambda message: None)
-    yield
-    mujoco.set_mju_user_warning(previous)
 
 
 class Diverges(ReachTask):

@@ -338,3 +338,15 @@ def test_reload_from_mjcf_model_recompiles():
     root.worldbody.add("geom", name="only", size=[1])
     physics.reload_from_mjcf_model(root)
     assert physics.model.ngeom == 1
+
+
+def test_mujoco_warnings_go_to_logging_not_to_a_log_file(tmp_path, monkeypatch, caplog):
+    monkeypatch.chdir(tmp_path)
+    physics = mjcf.Physics.from_xml_string(
+        "<mujoco><worldbody><body><joint/><geom size='1'/></body></worldbody></mujoco>"
+    )
+    physics.data.qvel[:] = np.nan
+    with caplog.at_level("WARNING"), physics.suppress_physics_errors():
+        physics.step()
+    assert "MuJoCo warning" in caplog.text
+    assert not (tmp_path / "MUJOCO_LOG.TXT").exists()
