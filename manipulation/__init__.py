@@ -1,0 +1,37 @@
+"""The manipulation suite: a Jaco-style arm and hand, props and 25 tasks on a table.
+
+`load(name, seed)` builds the environment called `name` (one of `ALL`) as a
+`composer.Environment`: control steps of 0.04 s (20 physics steps of 0.002 s), 10 s
+episodes, a 9-D action (six arm joint velocities, then three finger velocities).
+"""
+
+import composer
+from manipulation.tasks import registry
+from manipulation.tasks import task_constants as _task_constants
+
+ALL = registry.names()
+TAGS = registry.tags()
+
+
+def get_environments_by_tag(tag: str) -> tuple[str, ...]:
+    """Returns the names of the environments tagged `tag` (one of `TAGS`).
+
+    Raises:
+      ValueError: if `tag` is not one of `TAGS`.
+    """
+    return registry.names_with_tag(tag)
+
+
+def load(environment_name: str, seed=None) -> composer.Environment:
+    """Returns the environment `environment_name`, seeded with `seed`.
+
+    Args:
+      environment_name: one of `ALL`, e.g. 'reach_site_features'.
+      seed: an int, a `np.random.RandomState`, or None for a random seed; it drives every
+        random choice of the episodes (initial arm pose, prop placement, targets).
+
+    Raises:
+      ValueError: if the name is not one of `ALL`; the message suggests close names.
+    """
+    task = registry.build_task(environment_name)
+    return composer.Environment(task, time_limit=_task_constants.TIME_LIMIT, random_state=seed)

@@ -1,0 +1,5 @@
+"""Arenas of the manipulation suite."""
+
+from manipulation.arenas.table import TableArena
+
+__all__ = ["TableArena"]

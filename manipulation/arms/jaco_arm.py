@@ -1,0 +1,142 @@
+"""JacoArm: the six-joint Jaco-style arm as a composer robot."""
+
+import mujoco
+import numpy as np
+
+import composer
+import mjcf
+from composer.observation import observable
+from manipulation.models import arm as arm_model
+
+
+class JacoArm(composer.Robot):
+    """A 6-DOF Kinova Jaco-style arm driven by joint velocity servos.
+
+    The model is named 'jaco_arm' and stands on its base at the origin of its frame. The
+    default configuration is the home pose, with the hand pointing down 0.3 m above the
+    table. The action is one velocity (rad/s) per joint: ±0.6283 for joints 1-3 and
+    ±0.8378 for joints 4-6. `attach(hand)` mounts a hand at `wrist_site`.
+
+    Observables: `joints_pos` (6, 2), the sine and cosine of each joint angle;
+    `joints_vel` (6,) in rad/s; `joints_torque` (6,), the torque (N m) each joint
+    transmits, measured about its axis.
+    """
+
+    def _build(self, name: str = "jaco_arm") -> None:
+        self._mjcf_root = mjcf.from_xml_string(arm_model.jaco_arm_xml())
+        self._mjcf_root.model = name
+        root = self._mjcf_root
+        self._joints = tuple(root.find("joint", joint) for joint in arm_model.JOINT_NAMES)
+        self._actuators = tuple(
+            root.find("actuator", actuator) for actuator in arm_model.ACTUATOR_NAMES
+        )
+        self._joint_torque_sensors = tuple(
+            root.find("sensor", sensor) for sensor in arm_model.TORQUE_SENSOR_NAMES
+        )
+        self._wrist_site = root.find("site", arm_model.WRIST_SITE_NAME)
+
+    def _build_observables(self) -> "JacoArmObservables":
+        return JacoArmObservables(self)
+
+    @property
+    def mjcf_model(self):
+        return self._mjcf_root
+
+    @property
+    def joints(self) -> tuple:
+        """The six hinge joints, from the shoulder to the wrist."""
+        return self._joints
+
+    @property
+    def actuators(self) -> tuple:
+        """The six velocity actuators, in joint order."""
+        return self._actuators
+
+    @property
+    def joint_torque_sensors(self) -> tuple:
+        """The 3-axis torque sensors at each joint, in joint order."""
+        return self._joint_torque_sensors
+
+    @property
+    def wrist_site(self):
+        """The site where the hand is mounted; its +z axis points out of the wrist."""
+        return self._wrist_site
+
+    @property
+    def attachment_site(self):
+        return self._wrist_site
+
+
+class _JointAngleSinCos(observable.Observable):
+    """The sine and cosine of hinge joint angles, as a (n_joints, 2) array."""
+
+    def __init__(self, joints):
+        self._joints = joints
+        super().__init__(
+            update_interval=1, buffer_size=None, delay=None, aggregator=None, corruptor=None
+        )
+
+    def _callable(self, physics):
+        model = physics.model.ptr
+        ids = [
+            mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_JOINT, joint.full_identifier)
+            for joint in self._joints
+        ]
+        qpos = physics.data.ptr.qpos
+        addresses = model.jnt_qposadr[ids]
+        out = np.empty((len(ids), 2))
+
+        def read():
+            angles = qpos.take(addresses)
+            np.sin(angles, out=out[:, 0])
+            np.cos(angles, out=out[:, 1])
+            return out
+
+        return read
+
+
+class _JointTorques(observable.Observable):
+    """The torque each joint transmits: its 3-axis torque sensor projected on its axis."""
+
+    def __init__(self, joints, sensors):
+        self._joints = joints
+        self._sensors = sensors
+        super().__init__(
+            update_interval=1, buffer_size=None, delay=None, aggregator=None, corruptor=None
+        )
+
+    def _callable(self, physics):
+        model = physics.model.ptr
+        joint_ids = [
+            mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_JOINT, joint.full_identifier)
+            for joint in self._joints
+        ]
+        sensor_ids = [
+            mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_SENSOR, sensor.full_identifier)
+            for sensor in self._sensors
+        ]
+        # The sensor frames are aligned with the joints' link frames, where the axes live.
+        rows = model.sensor_adr[sensor_ids][:, None] + np.arange(3)
+        axes = model.jnt_axis[joint_ids].copy()
+        sensordata = physics.data.ptr.sensordata
+
+        def read():
+            return (sensordata.take(rows) * axes).sum(1)
+
+        return read
+
+
+class JacoArmObservables(composer.Observables):
+    """Proprioception of the arm: joint angles (as sine and cosine), velocities, torques."""
+
+    @composer.observable
+    def joints_pos(self):
+        return _JointAngleSinCos(self._entity.joints)
+
+    @composer.observable
+    def joints_vel(self):
+        return observable.MJCFFeature("qvel", list(self._entity.joints))
+
+    @composer.observable
+    def joints_torque(self):
+        return _JointTorques(self._entity.joints, self._entity.joint_torque_sensors)
