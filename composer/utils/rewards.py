@@ -65,6 +65,7 @@ _SIGMOIDS = {
 }
 
 SIGMOIDS = tuple(_SIGMOIDS)
+_SCALAR_TYPES = (int, float, np.integer, np.floating)
 
 
 def _sigmoids(x, value_at_1: float, sigmoid: str):
@@ -119,6 +120,14 @@ def tolerance(
         raise ValueError(f"tolerance: margin must be non-negative, got {margin}")
     if sigmoid not in _SIGMOIDS:
         raise ValueError(f"tolerance: unknown sigmoid {sigmoid!r}; expected one of {SIGMOIDS}")
+    if isinstance(x, _SCALAR_TYPES):
+        # Plain-Python comparisons: rewards are usually computed from one distance per step.
+        if lower <= x <= upper:
+            return 1.0
+        if margin == 0:
+            return 0.0
+        distance = (lower - x if x < lower else x - upper) / margin
+        return float(_sigmoids(distance, value_at_margin, sigmoid))
     x_array = np.asarray(x)
     in_bounds = (lower <= x_array) & (x_array <= upper)
     if margin == 0:

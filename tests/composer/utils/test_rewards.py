@@ -103,3 +103,13 @@ def test_negative_margin_is_rejected():
 def test_unknown_sigmoid_is_rejected_with_the_valid_names():
     with pytest.raises(ValueError, match="unknown sigmoid 'sigmund'.*gaussian"):
         rewards.tolerance(0.0, margin=1.0, sigmoid="sigmund")
+
+
+@pytest.mark.parametrize("sigmoid", ALL_SIGMOIDS)
+def test_scalar_and_array_inputs_give_the_same_values(sigmoid):
+    points = np.linspace(-3.0, 4.0, 29)
+    as_array = rewards.tolerance(points, bounds=(-1.0, 2.0), margin=0.7, sigmoid=sigmoid)
+    one_by_one = [
+        rewards.tolerance(float(p), bounds=(-1.0, 2.0), margin=0.7, sigmoid=sigmoid) for p in points
+    ]
+    np.testing.assert_allclose(one_by_one, as_array, rtol=1e-14, atol=0)
