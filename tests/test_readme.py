@@ -10,7 +10,7 @@ README = pathlib.Path(__file__).resolve().parents[1] / "README.md"
 
 def _section_code(title: str) -> str:
     text = README.read_text()
-    match = re.search(rf"## {re.escape(title)}\n\n```python\n(.*?)```", text, re.S)
+    match = re.search(rf"## {re.escape(title)}\n[^#]*?```python\n(.*?)```", text, re.S)
     assert match, f"README has no python block under '## {title}'"
     return match.group(1)
 
@@ -21,3 +21,11 @@ def test_write_your_own_task_example_runs_and_the_ball_lands():
         exec(compile(_section_code("Write your own task"), str(README), "exec"), {})
     # The ball is dropped from 0.5-1 m and the episode lasts 2 s: it ends on the floor.
     assert printed.getvalue().strip() == "1.0"
+
+
+def test_manipulation_example_runs_an_episode_to_its_time_limit():
+    namespace = {}
+    exec(compile(_section_code("Manipulation tasks"), str(README), "exec"), namespace)
+    timestep = namespace["timestep"]
+    assert timestep.last()
+    assert namespace["env"].physics.data.time >= 10.0
