@@ -6,7 +6,6 @@ import numpy as np
 
 from mjcf import constants
 from mjcf.element import Element, RootElement
-from mjcf.namescope import NameScope
 
 _ATTACHABLE_TAGS = ("site", "body", "worldbody")
 _FRAME_CHILDREN = ("joint", "freejoint", "inertial")
@@ -103,8 +102,9 @@ def attach(site_or_body: Element, model: RootElement) -> AttachmentFrame:
     body._children.append(frame)
     parent_model._frames.append(frame)
     model._frame = frame
-    NameScope.naming_changed()
+    parent_model._namescope.naming_changed()
     frame._changed()
+    frame._files_changed()
     return frame
 
 

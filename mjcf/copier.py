@@ -20,6 +20,7 @@ def copy_model(source: RootElement) -> RootElement:
         scope = model._namescope
         new = RootElement(model_dir=scope.model_dir, assets=scope.assets)
         new._attributes = dict(model._attributes)
+        new._texts = dict(model._texts)
         new._namescope._unnamed_counts = dict(scope._unnamed_counts)
         memo[id(model)] = new
         copy_children(model, new, new)

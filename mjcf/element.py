@@ -77,6 +77,7 @@ class Element:
         "_texts",
         "_children",
         "_xml_cache",
+        "_text_cache",
         "_auto_id",
         "_removed",
         "__weakref__",
@@ -98,6 +99,7 @@ class Element:
         _set_slot(element, "_texts", {})
         _set_slot(element, "_children", [])
         _set_slot(element, "_xml_cache", None)
+        _set_slot(element, "_text_cache", None)
         _set_slot(element, "_auto_id", None)
         _set_slot(element, "_removed", False)
         return element
@@ -156,9 +158,11 @@ class Element:
         return (prefix or _SEP) + self._unnamed_id()
 
     def _unnamed_id(self) -> str:
-        if self._auto_id is None:
-            self._auto_id = self._root._namescope.next_unnamed(self._spec.namespace, self)
-        return self._auto_id
+        auto_id = self._auto_id
+        if auto_id is None:
+            auto_id = self._root._namescope.next_unnamed(self._spec.namespace, self)
+            _set_slot(self, "_auto_id", auto_id)
+        return auto_id
 
     def _describe(self) -> str:
         name = self._attributes.get(self._spec.identifier) if self._spec.identifier else None
@@ -243,6 +247,8 @@ class Element:
             raise RuntimeError(f"{self._describe()} has been removed from its model")
         xml_name = spec.name
         kind = spec.type.kind
+        if kind == attribute_types.FILE:
+            self._files_changed()
         if value is None:
             self._texts.pop(xml_name, None)
             old = self._attributes.pop(xml_name, None)
@@ -262,7 +268,8 @@ class Element:
         elif kind == attribute_types.FILE and isinstance(converted, str):
             converted = self._load_file(name, converted)
         elif kind == attribute_types.STRING or kind == attribute_types.OTHER:
-            # Formatted now at full precision, so that writing XML only joins text.
+            # Formatted now at full precision, so that writing XML only joins text. `_texts`
+            # holds exactly the plain (string and other) attributes, in `_attributes` order.
             self._texts[xml_name] = attribute_types.xml_text(xml_name, spec.type, converted)
         self._attributes[xml_name] = converted
         _set_slot(self, "_xml_cache", None)
@@ -438,7 +445,9 @@ class Element:
                 element._root._frames.remove(element)
                 attached._frame = None
             element._removed = True
-        NameScope.naming_changed()
+        self._root._namescope.naming_changed()
+        if self._spec.holds_files:
+            self._files_changed()
         parent._children.remove(self)
         parent._changed()
 
@@ -524,9 +533,25 @@ class Element:
 
     def _changed(self) -> None:
         _set_slot(self, "_xml_cache", None)
+        # The cached text of every element that encloses this one (across attachments)
+        # includes this one's.
+        element = self
+        while element is not None:
+            if element._text_cache is not None:
+                _set_slot(element, "_text_cache", None)
+            parent = element._parent
+            element = parent if parent is not None else _frame_of(element)
         model = self._root
         while model is not None:
             model._modification_count += 1
+            frame = model._frame
+            model = frame._root if frame is not None else None
+
+    def _files_changed(self) -> None:
+        """Marks the file assets of this model, and of those it is attached below, as stale."""
+        model = self._root
+        while model is not None:
+            model._files_count += 1
             frame = model._frame
             model = frame._root if frame is not None else None
 
@@ -615,6 +640,7 @@ class RootElement(Element):
         "_frame",
         "_frames",
         "_modification_count",
+        "_files_count",
         "_xml_string_cache",
         "_assets_cache",
     )
@@ -627,12 +653,14 @@ class RootElement(Element):
         self._texts = {}
         self._children = []
         self._xml_cache = None
+        self._text_cache = None
         self._auto_id = None
         self._removed = False
         self._namescope = NameScope(self, model_dir, assets)
         self._frame = None
         self._frames = []
         self._modification_count = 0
+        self._files_count = 0
         self._xml_string_cache = None
         self._assets_cache = None
         self.model = model or UNNAMED_MODEL
@@ -678,7 +706,9 @@ class RootElement(Element):
                     )
         super()._set_attribute(name, value)
         if name == "model":
-            NameScope.naming_changed()
+            self._namescope.naming_changed()
+            # Skin files name bones by their scoped body names.
+            self._files_changed()
 
     def _attached_model(self, name: str) -> RootElement | None:
         for frame in self._frames:
@@ -711,10 +741,10 @@ class RootElement(Element):
     def get_assets(self) -> dict[str, bytes]:
         """Every file asset of this model and attached models: VFS filename -> contents."""
         cache = self._assets_cache
-        if cache is None or cache[0] != self._modification_count:
+        if cache is None or cache[0] != self._files_count:
             from mjcf import xml_writer
 
-            cache = (self._modification_count, xml_writer.collect_assets(self))
+            cache = (self._files_count, xml_writer.collect_assets(self))
             self._assets_cache = cache
         return dict(cache[1])
 

@@ -10,10 +10,11 @@ UNNAMED_MODEL = "unnamed_model"
 class NameScope:
     """Identifiers of one `RootElement`, per namespace ('body', 'geom', 'default', ...).
 
-    `NameScope.epoch` (class-wide) grows whenever any identifier, model name or attachment
-    changes anywhere, so cached scoped names can be reused while it stays the same.
-
     Attributes:
+      naming_stamp: a number that changes whenever an identifier, model name or attachment
+        changes in this model or in any model attached below it (never to a value it had
+        before, nor to one another scope's stamp had), so text with scoped names written for
+        this model stays valid while the stamp is unchanged.
       mjcf_model: the RootElement this scope belongs to.
       model_dir: directory that relative file paths of this model are resolved against.
       assets: filename -> bytes given when the model was created, consulted before the disk.
@@ -26,22 +27,32 @@ class NameScope:
         "_namespaces",
         "_unnamed_counts",
         "_unnamed",
+        "naming_stamp",
     )
 
-    epoch = 0
+    # Source of naming stamps, shared by all scopes so that no two changes get the same one.
+    _changes = 0
 
-    @staticmethod
-    def naming_changed() -> None:
-        """Marks every cached scoped name as stale."""
-        NameScope.epoch += 1
+    def naming_changed(self) -> None:
+        """Gives this scope, and the scopes of the models it is attached below, a new stamp."""
+        NameScope._changes += 1
+        stamp = NameScope._changes
+        model = self.mjcf_model
+        while model is not None:
+            model._namescope.naming_stamp = stamp
+            frame = model._frame
+            model = frame._root if frame is not None else None
 
     def __init__(self, mjcf_model, model_dir: str = "", assets: dict | None = None):
+        NameScope._changes += 1
+        self.naming_stamp = NameScope._changes
         self.mjcf_model = mjcf_model
         self.model_dir = model_dir
         self.assets = dict(assets) if assets else {}
         self._namespaces: dict[str, dict[str, object]] = {}
         self._unnamed_counts: dict[str, int] = {}
-        self._unnamed: dict[str, dict[str, object]] = {}
+        # Generated identifier -> element, per namespace; built on first lookup.
+        self._unnamed: dict[str, dict[str, object]] | None = None
 
     @property
     def name(self) -> str:
@@ -96,34 +107,49 @@ class NameScope:
                 f"{self.name!r}: {_describe(element)} clashes with {_describe(existing)}"
             )
         names[identifier] = element
-        NameScope.epoch += 1
+        self.naming_changed()
 
     def remove(self, namespace: str, identifier: str) -> None:
         names = self._namespaces.get(namespace)
         if names is not None:
             names.pop(identifier, None)
-        NameScope.epoch += 1
+        self.naming_changed()
 
     def identifiers(self, namespace: str) -> list[str]:
         return list(self._namespaces.get(namespace, {}))
 
     def next_unnamed(self, namespace: str, element) -> str:
         """A fresh identifier for an unnamed element; cannot clash with user names."""
-        count = self._unnamed_counts.get(namespace, 0)
-        self._unnamed_counts[namespace] = count + 1
+        counts = self._unnamed_counts
+        count = counts.get(namespace, 0)
+        counts[namespace] = count + 1
         identifier = f"/unnamed_{namespace}_{count}"
-        self.add_unnamed(namespace, identifier, element)
+        if self._unnamed is not None:
+            self.add_unnamed(namespace, identifier, element)
         return identifier
 
     def add_unnamed(self, namespace: str, identifier: str, element) -> None:
-        self._unnamed.setdefault(namespace, {})[identifier] = element
+        if self._unnamed is None:
+            return
+        unnamed = self._unnamed.get(namespace)
+        if unnamed is None:
+            unnamed = self._unnamed[namespace] = {}
+        unnamed[identifier] = element
 
     def get_unnamed(self, namespace: str, identifier: str):
         """The unnamed element that was given generated `identifier`, or None."""
+        if self._unnamed is None:
+            # Looking elements up by generated name is rare and generating names is frequent
+            # (every XML write of a new model), so the index is built on first use.
+            self._unnamed = {}
+            for element in self.mjcf_model._iter_own_tree():
+                if element._auto_id is not None:
+                    self.add_unnamed(element._spec.namespace, element._auto_id, element)
         return self._unnamed.get(namespace, {}).get(identifier)
 
     def remove_unnamed(self, namespace: str, identifier: str) -> None:
-        self._unnamed.get(namespace, {}).pop(identifier, None)
+        if self._unnamed is not None:
+            self._unnamed.get(namespace, {}).pop(identifier, None)
 
 
 def _describe(element) -> str:

@@ -48,6 +48,9 @@ class ElementSpec:
       namespace: the MuJoCo object family this element compiles to, or None.
       identifier: the attribute that names this element uniquely in its namespace, or None.
       path: tags from the root, for error messages.
+      takes_class: whether the element has a `class` attribute (takes a default class).
+      holds_files: whether the element, or an element that may be nested in it, has file
+        attributes (so searches for file assets can skip the rest).
     """
 
     __slots__ = (
@@ -59,6 +62,8 @@ class ElementSpec:
         "identifier",
         "path",
         "python_attributes",
+        "takes_class",
+        "holds_files",
     )
 
     def __init__(self, name: str, repeated: bool, path: str):
@@ -70,6 +75,8 @@ class ElementSpec:
         self.identifier: str | None = None
         self.path = path
         self.python_attributes: dict[str, AttributeSpec] = {}
+        self.takes_class = False
+        self.holds_files = False
 
     @property
     def on_demand(self) -> bool:
@@ -82,6 +89,7 @@ class ElementSpec:
             self.python_attributes[spec.python_name] = spec
             if name == "class":
                 self.python_attributes[name] = spec
+                self.takes_class = True
 
     def __repr__(self) -> str:
         return f"ElementSpec({self.path!r})"
@@ -143,7 +151,23 @@ def root_spec() -> ElementSpec:
         if parent is None:
             root = spec
         stack.append(spec)
+    _mark_file_holders(root)
     return root
+
+
+def _mark_file_holders(root: ElementSpec) -> None:
+    """Sets `holds_files` on every spec (children may nest recursively, so iterate)."""
+    specs = _reachable(root)
+    for spec in specs:
+        spec.holds_files = any(
+            a.type.kind == attribute_types.FILE for a in spec.attributes.values()
+        )
+    changed = True
+    while changed:
+        changed = False
+        for spec in specs:
+            if not spec.holds_files and any(c.holds_files for c in spec.children.values()):
+                spec.holds_files = changed = True
 
 
 def _make_spec(tag, parent, repeated, names) -> ElementSpec:
@@ -169,16 +193,21 @@ def _nested_copy(spec: ElementSpec) -> ElementSpec:
     nested.children = spec.children
     nested.namespace = spec.namespace
     nested.identifier = spec.identifier
+    nested.takes_class = spec.takes_class
     return nested
 
 
 def all_specs() -> list[ElementSpec]:
     """Every distinct element spec reachable from the root, parents before children."""
-    seen: dict[int, ElementSpec] = {}
-    order = [root_spec()]
+    return _reachable(root_spec())
+
+
+def _reachable(root: ElementSpec) -> list[ElementSpec]:
+    seen = {id(root)}
+    order = [root]
     for spec in order:
         for child in spec.children.values():
             if id(child) not in seen:
-                seen[id(child)] = child
+                seen.add(id(child))
                 order.append(child)
     return order

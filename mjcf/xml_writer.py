@@ -2,7 +2,10 @@
 
 The text is assembled directly from string pieces. Each element caches the formatted text of
 its plain attributes (per precision setting); identifiers, references and file names are
-scoped at write time because they depend on where the model is attached.
+scoped at write time because they depend on where the model is attached. A whole-model write
+also caches each element's opening tag, valid while the written model's naming stamp (see
+`NameScope`), the element's scope prefix and its inherited default class stay the same, and
+the whole text, valid while the model's modification count also stays the same.
 
 A whole model is written so that every compiled object is addressable: unnamed elements that
 compile to a named object get a generated name, and every element that accepts a default
@@ -17,17 +20,24 @@ from mjcf import attribute_types, constants, schema, skin_file
 from mjcf.asset import Asset
 from mjcf.attachment import AttachmentFrame
 from mjcf.element import Element, RootElement
-from mjcf.namescope import NameScope
 
 _SEP = constants.PREFIX_SEPARATOR
 _STRING = attribute_types.STRING
 _IDENTIFIER = attribute_types.IDENTIFIER
+_OTHER = attribute_types.OTHER
 _REFERENCE = attribute_types.REFERENCE
 _FILE = attribute_types.FILE
 _FULL_PRECISION = (17, 0)
+_DEFAULT = constants.DEFAULT
+_MAIN = "main"
 _TOP_ONLY_SECTIONS = ("statistic",)
-# Bypasses Element.__setattr__, which handles XML attributes.
+# Element._xml_cache is (precision key, plain attribute text, stamp, scope prefix, inherited
+# class, opening tag, class the children inherit); the last five are None when only the plain
+# text is cached. Setting it bypasses Element.__setattr__, which handles XML attributes.
 _set_xml_cache = Element.__dict__["_xml_cache"].__set__
+# Element._text_cache is (text stamp, scope prefix, inherited class, depth, text of the element
+# with its children); Element._changed clears it on the element and all that enclose it.
+_set_text_cache = Element.__dict__["_text_cache"].__set__
 
 
 _escape = attribute_types.escape
@@ -47,11 +57,20 @@ class _Writer:
         "precision",
         "zero_threshold",
         "key",
+        "full_precision",
         "pretty",
         "self_close",
         "full",
         "prefix_root",
         "prefixes",
+        "sections",
+        "resolved",
+        "class_texts",
+        "stamp",
+        "text_stamp",
+        "empty_close",
+        "open_end",
+        "shallow",
     )
 
     def __init__(self, prefix_root, self_close, pretty, precision, zero_threshold, full):
@@ -59,11 +78,26 @@ class _Writer:
         self.precision = precision
         self.zero_threshold = zero_threshold
         self.key = (precision, zero_threshold)
+        self.full_precision = self.key == _FULL_PRECISION
         self.pretty = pretty
         self.self_close = self_close
         self.full = full
         self.prefix_root = prefix_root
         self.prefixes: dict[int, str] = {}
+        self.sections: dict[int, dict[str, Element]] = {}
+        # (model, namespace, name) -> XML text of a name found in that model's own scope.
+        self.resolved: dict[tuple, str] = {}
+        self.class_texts: dict[str, str] = {}
+        # Element heads of a whole-model write are cached under this stamp with their scope
+        # prefix and inherited class (see `model`); other writes do not use the cache.
+        self.stamp = None
+        # Whole texts of elements with children are cached under this stamp, with their
+        # scope prefix, inherited class and depth.
+        self.text_stamp = None
+        self.empty_close = ("/>\n" if pretty else "/>") if self_close else None
+        self.open_end = ">\n" if pretty else ">"
+        # Writes only the element's own tag, with '...' standing for its children.
+        self.shallow = False
 
     def indent(self, depth: int) -> str:
         return "  " * depth if self.pretty else ""
@@ -73,35 +107,30 @@ class _Writer:
 
     # ------------------------------------------------------------------ attribute text
 
-    def cached_attributes(self, element: Element):
+    def static_text(self, element: Element) -> str:
+        """Text of the plain attributes: those that read the same wherever the model is.
+
+        Identifiers, references and files are left out; they are scoped at write time.
+        """
         cache = element._xml_cache
         if cache is not None and cache[0] == self.key:
-            return cache[1], cache[2]
-        attributes = element._spec.attributes
-        full_precision = self.key == _FULL_PRECISION
-        texts = element._texts
-        parts = []
-        dynamic = []
-        for name, value in element._attributes.items():
-            if full_precision:
-                text = texts.get(name)
-                if text is not None:
-                    parts.append(text)
-                    continue
-            value_type = attributes[name].type
-            kind = value_type.kind
-            if kind == _STRING or kind == attribute_types.OTHER:
-                parts.append(
-                    attribute_types.xml_text(
-                        name, value_type, value, self.precision, self.zero_threshold
-                    )
+            return cache[1]
+        if self.full_precision:
+            # `_texts` holds the full-precision text of exactly the plain attributes, in the
+            # order of `_attributes` (Element keeps both in step).
+            static = "".join(element._texts.values())
+        else:
+            specs = element._spec.attributes
+            plain = element._texts
+            static = "".join(
+                attribute_types.xml_text(
+                    name, specs[name].type, value, self.precision, self.zero_threshold
                 )
-            elif kind != _IDENTIFIER:
-                dynamic.append((name, kind, value, value_type))
-        static = "".join(parts)
-        dynamic = tuple(dynamic)
-        _set_xml_cache(element, (self.key, static, dynamic, None, None, None))
-        return static, dynamic
+                for name, value in element._attributes.items()
+                if name in plain
+            )
+        _set_xml_cache(element, (self.key, static, None, None, None, None, None))
+        return static
 
     def prefix_of(self, model: RootElement) -> str | None:
         prefix = self.prefixes.get(id(model))
@@ -112,19 +141,33 @@ class _Writer:
 
     def resolve(self, element: Element, name: str, value, value_type) -> str:
         """The scoped identifier a reference attribute names, as written to XML."""
-        if isinstance(value, str):
-            namespace = value_type.target_namespace(element._attributes)
+        root = element._root
+        if type(value) is str:
+            namespace = value_type.namespace
             if namespace is None:
-                return _escape(self.prefix_of(element._root) + value)
-            target = element._root.find(namespace, value)
+                namespace = value_type.target_namespace(element._attributes)
+                if namespace is None:
+                    return _escape(self.prefix_of(root) + value)
+            key = (root, namespace, value)
+            text = self.resolved.get(key)
+            if text is not None:
+                return text
+            if _SEP not in value and not (namespace == _DEFAULT and value == _MAIN):
+                # An unscoped name registered in the element's own model: the common case,
+                # resolved without the general scoped lookup.
+                names = root._namescope._namespaces.get(namespace)
+                if names is not None and value in names:
+                    text = self.resolved[key] = _escape(self.prefix_of(root) + value)
+                    return text
+            target = root.find(namespace, value)
             if target is None:
                 if element._spec.namespace is None and _in_defaults(element):
                     # MuJoCo only checks references of defaults that something uses.
-                    return _escape(self.prefix_of(element._root) + value)
+                    return _escape(self.prefix_of(root) + value)
                 if self.full:
                     raise ValueError(
                         f"{element._describe()} attribute {name!r} refers to {value!r}, but "
-                        f"model {element._root._namescope.name!r} has no {namespace!r} "
+                        f"model {root._namescope.name!r} has no {namespace!r} "
                         f"element with that name"
                     )
                 return _escape(value)
@@ -144,81 +187,171 @@ class _Writer:
             )
         return _escape(_scoped_identifier(target, prefix))
 
-    def dynamic_text(self, element: Element, dynamic) -> tuple[str, bool]:
-        parts = []
-        has_class = False
-        for name, kind, value, value_type in dynamic:
-            if kind == _REFERENCE:
-                if name == "class":
-                    has_class = True
-                parts.append(f' {name}="{self.resolve(element, name, value, value_type)}"')
-            elif kind == _FILE:
-                if isinstance(value, Asset):
-                    value = _file_asset(element, value, self.prefix_of(element._root))
-                    text = value.get_vfs_filename()
-                else:
-                    text = value
-                parts.append(f' {name}="{_escape(text)}"')
-        return "".join(parts), has_class
-
     # ---------------------------------------------------------------------- elements
 
     def element(self, element: Element, depth: int, prefix: str, dclass: str | None) -> None:
-        """Writes `element` of the model with scope `prefix`; `dclass`: inherited class."""
+        """Writes `element` of the model with scope `prefix`; `dclass`: inherited class.
+
+        This runs once per element of the model, so the opening tag ("head") is built here
+        rather than in a helper: on a model's first write that saves a call per element.
+        """
         if type(element) is AttachmentFrame:
-            self.frame(element, depth, dclass)
+            self.kept(element, depth, prefix, dclass, self.frame, element, depth, dclass)
             return
-        head_key = (self.key, NameScope.epoch, prefix, dclass, self.full)
-        cache = element._xml_cache
-        if cache is not None and cache[3] == head_key:
-            head = cache[4]
-            dclass = cache[5]
-        else:
-            head, dclass = self.head(element, prefix, dclass, head_key)
         out = self.out
-        pretty = self.pretty
-        out.append("  " * depth + head if pretty else head)
+        stamp = self.stamp
+        if stamp is not None:
+            text = element._text_cache
+            if (
+                text is not None
+                and text[0] == self.text_stamp
+                and text[1] == prefix
+                and text[2] == dclass
+                and text[3] == depth
+            ):
+                out.append(text[4])
+                return
+        cache = element._xml_cache
+        inherited = dclass
+        if (
+            stamp is not None
+            and cache is not None
+            and cache[2] == stamp
+            and cache[3] == prefix
+            and cache[4] == dclass
+        ):
+            head = cache[5]
+            dclass = cache[6]
+            # Written before under the same names: likely to be written again, so its whole
+            # text is kept below (not on a first write, which would pay for joining it).
+            keep_text = True
+        else:
+            keep_text = False
+            spec = element._spec
+            attributes = element._attributes
+            plain = element._texts
+            if cache is not None and cache[0] == self.key:
+                static = cache[1]
+            elif self.full_precision:
+                static = "".join(plain.values())
+            else:
+                static = self.static_text(element)
+            # Attributes that are neither plain nor the name: references and files.
+            scoped = len(attributes) - len(plain)
+            if spec.identifier == "name":
+                identifier = attributes.get("name")
+                if identifier is not None:
+                    scoped -= 1
+                    head = f'<{spec.name} name="{_escape(prefix + identifier)}"{static}'
+                elif self.full:
+                    auto_id = element._auto_id or element._unnamed_id()
+                    head = f'<{spec.name} name="{prefix or _SEP}{auto_id}"{static}'
+                else:
+                    head = f"<{spec.name}{static}"
+            else:
+                head = f"<{spec.name}{static}"
+            has_class = False
+            if scoped:
+                specs = spec.attributes
+                for name, value in attributes.items():
+                    if name in plain:
+                        continue
+                    value_type = specs[name].type
+                    kind = value_type.kind
+                    if kind == _REFERENCE:
+                        if name == "class":
+                            has_class = True
+                        head += f' {name}="{self.resolve(element, name, value, value_type)}"'
+                    elif kind == _FILE:
+                        if isinstance(value, Asset):
+                            value = _file_asset(element, value, self.prefix_of(element._root))
+                            value = value.get_vfs_filename()
+                        head += f' {name}="{_escape(value)}"'
+            if dclass is not None and not has_class and spec.takes_class:
+                head += self.class_text(dclass)
+            if spec.name == "body":
+                childclass = attributes.get("childclass")
+                if childclass is not None:
+                    childclass_type = spec.attributes["childclass"].type
+                    dclass = self.resolve(element, "childclass", childclass, childclass_type)
+            if stamp is not None:
+                _set_xml_cache(element, (self.key, static, stamp, prefix, inherited, head, dclass))
+            elif cache is None or cache[0] != self.key:
+                _set_xml_cache(element, (self.key, static, None, None, None, None, None))
+        start = len(out)
+        if self.pretty:
+            out.append("  " * depth)
+        out.append(head)
         children = element._children
         if children:
+            if self.shallow:
+                out.append(f">...</{element._spec.name}>")
+                return
             mark = len(out)
-            out.append(">\n" if pretty else ">")
+            out.append(self.open_end)
             for child in children:
-                if _worth_writing(child):
+                # Inlined _worth_writing: this loop visits every element of the model.
+                if (
+                    child._children
+                    or child._attributes
+                    or child._spec.repeated
+                    or child._spec.namespace is not None
+                ):
                     self.element(child, depth + 1, prefix, dclass)
             if len(out) > mark + 1:
                 tag = element._spec.name
-                out.append(f"{'  ' * depth}</{tag}>\n" if pretty else f"</{tag}>")
+                out.append(f"{'  ' * depth}</{tag}>\n" if self.pretty else f"</{tag}>")
+                if keep_text:
+                    text = "".join(out[start:])
+                    out[start:] = [text]
+                    _set_text_cache(element, (self.text_stamp, prefix, inherited, depth, text))
                 return
             del out[mark:]
-        out.append(self.close(element._spec.name))
+        out.append(self.empty_close or self.close(element._spec.name))
 
-    def head(self, element: Element, prefix: str, dclass: str | None, head_key):
-        """The opening tag without its closing bracket, and the class its children inherit."""
-        spec = element._spec
-        static, dynamic = self.cached_attributes(element)
-        head = ["<", spec.name]
-        if spec.identifier == "name":
-            identifier = element._attributes.get("name")
-            if identifier is not None:
-                head.append(f' name="{_escape(prefix + identifier)}"')
-            elif self.full:
-                head.append(f' name="{prefix or _SEP}{element._unnamed_id()}"')
-        head.append(static)
-        has_class = False
-        if dynamic:
-            text, has_class = self.dynamic_text(element, dynamic)
-            head.append(text)
-        if dclass is not None and not has_class and "class" in spec.attributes:
-            head.append(f' class="{_escape(dclass)}"')
-        if spec.name == "body":
-            childclass = element._attributes.get("childclass")
-            if childclass is not None:
-                childclass_type = spec.attributes["childclass"].type
-                dclass = self.resolve(element, "childclass", childclass, childclass_type)
-        text = "".join(head)
-        cache = element._xml_cache
-        _set_xml_cache(element, (cache[0], cache[1], cache[2], head_key, text, dclass))
-        return text, dclass
+    def kept(self, owner: Element, depth: int, prefix: str, dclass, write, *args) -> None:
+        """Writes `owner`'s part of the document by calling `write(*args)`.
+
+        From the second whole-model write of the same part on (same stamp, scope prefix,
+        class and depth), its text is kept in `owner._text_cache` and reused.
+        """
+        stamp = self.text_stamp
+        if stamp is None:
+            write(*args)
+            return
+        out = self.out
+        cache = owner._text_cache
+        seen = (
+            cache is not None
+            and cache[0] == stamp
+            and cache[1] == prefix
+            and cache[2] == dclass
+            and cache[3] == depth
+        )
+        if seen and cache[4] is not None:
+            if cache[4]:
+                out.append(cache[4])
+            return
+        start = len(out)
+        write(*args)
+        text = None
+        if seen:
+            text = "".join(out[start:])
+            out[start:] = [text] if text else []
+        _set_text_cache(owner, (stamp, prefix, dclass, depth, text))
+
+    def children(self, parent: Element, depth: int, prefix: str, dclass: str | None) -> None:
+        """Writes the children of `parent` that change the compiled model."""
+        for child in parent._children:
+            if _worth_writing(child):
+                self.element(child, depth, prefix, dclass)
+
+    def class_text(self, dclass: str) -> str:
+        """' class="..."' for an inherited default class (a few distinct ones per model)."""
+        text = self.class_texts.get(dclass)
+        if text is None:
+            text = self.class_texts[dclass] = f' class="{_escape(dclass)}"'
+        return text
 
     def close(self, tag: str) -> str:
         return ("/>" if self.self_close else f"></{tag}>") + self.newline()
@@ -227,7 +360,7 @@ class _Writer:
         model = frame._attached
         own_prefix = self.prefix_of(frame._root)
         child_prefix = self.prefix_of(model)
-        static, dynamic = self.cached_attributes(frame)
+        static = self.static_text(frame)
         out = self.out
         out.append(f'{self.indent(depth)}<body name="{_escape(child_prefix)}"{static}>')
         out.append(self.newline())
@@ -236,16 +369,12 @@ class _Writer:
         world = model._singleton_if_present(constants.WORLDBODY)
         if world is not None:
             child_class = (child_prefix or _SEP) if self.full else None
-            for child in world._children:
-                if _worth_writing(child):
-                    self.element(child, depth + 1, child_prefix, child_class)
+            self.children(world, depth + 1, child_prefix, child_class)
         out.append(f"{self.indent(depth)}</body>{self.newline()}")
 
     def default_class(self, default: Element, depth: int, prefix: str, name: str) -> None:
         out = self.out
         out.append(f'{self.indent(depth)}<default class="{_escape(name)}"')
-        static, dynamic = self.cached_attributes(default)
-        del static, dynamic
         if not default._children:
             out.append(self.close("default"))
             return
@@ -261,16 +390,23 @@ class _Writer:
     # ------------------------------------------------------------------------- models
 
     def model(self, root: RootElement) -> None:
+        # Everything a head depends on lies in `root` and the models below it, whose naming
+        # changes all renew `root`'s naming stamp; the scope prefix covers where `root` is.
+        self.stamp = (self.key, id(root), root._namescope.naming_stamp)
+        self.text_stamp = (self.stamp, self.pretty, self.self_close)
         models = _models_below(root)
         for model in models:
             self.prefixes[id(model)] = model._namescope.full_prefix(self.prefix_root)
+            # Section tag -> section, looked up once per tag per model below.
+            self.sections[id(model)] = {c._spec.name: c for c in reversed(model._children)}
         out = self.out
         name = root._attributes.get("model")
         out.append(f'<mujoco model="{_escape(name)}">' if name is not None else "<mujoco>")
         out.append(self.newline())
         for tag in schema.root_spec().children:
             if tag in constants.GLOBAL_OPTION_SECTIONS:
-                self.merged_singleton(tag, _sections(models, tag), 1)
+                found = [self.sections[id(model)].get(tag) for model in models]
+                self.merged_singleton(tag, [s for s in found if s is not None], 1)
             elif tag == constants.DEFAULT:
                 self.defaults(models)
             elif tag in _TOP_ONLY_SECTIONS:
@@ -288,14 +424,22 @@ class _Writer:
         mark = len(out)
         out.append(f"{self.indent(depth)}<{tag}>{self.newline()}")
         for model in models:
-            section = model._singleton_if_present(tag)
+            section = self.sections[id(model)].get(tag)
             if section is None:
                 continue
             prefix = self.prefixes[id(model)]
             dclass = (prefix or _SEP) if self.full else None
-            for child in section._children:
-                if _worth_writing(child):
-                    self.element(child, depth + 1, prefix, dclass)
+            self.kept(
+                section,
+                depth + 1,
+                prefix,
+                dclass,
+                self.children,
+                section,
+                depth + 1,
+                prefix,
+                dclass,
+            )
         if len(out) == mark + 1:
             del out[mark:]
             return
@@ -306,12 +450,13 @@ class _Writer:
         out.append(f"{self.indent(1)}<default>{self.newline()}")
         for model in models:
             prefix = self.prefixes[id(model)]
-            default = model._singleton_if_present(constants.DEFAULT)
+            default = self.sections[id(model)].get(constants.DEFAULT)
             if default is None:
                 out.append(f'{self.indent(2)}<default class="{_escape(prefix or _SEP)}"')
                 out.append(self.close("default"))
             else:
-                self.default_class(default, 2, prefix, prefix or _SEP)
+                name = prefix or _SEP
+                self.kept(default, 2, prefix, name, self.default_class, default, 2, prefix, name)
         out.append(f"{self.indent(1)}</default>{self.newline()}")
 
     def merged_singleton(self, tag: str, elements: list, depth: int) -> None:
@@ -361,15 +506,6 @@ def _in_defaults(element: Element) -> bool:
     return False
 
 
-def _sections(models, tag: str) -> list:
-    found = []
-    for model in models:
-        section = model._singleton_if_present(tag)
-        if section is not None:
-            found.append(section)
-    return found
-
-
 def _models_below(root: RootElement) -> list[RootElement]:
     """`root` and every model attached below it, depth first in attachment order."""
     models = [root]
@@ -403,11 +539,12 @@ def element_to_string(
     if prefix_root is None:
         prefix_root = element._root
     if isinstance(element, RootElement):
-        # Unchanged models (same modification count, no renames anywhere) reuse their text.
+        # An unchanged model keeps its text: nothing in it or below it changed, and its
+        # identifiers are scoped as before.
         key = (
             element._modification_count,
-            NameScope.epoch,
-            id(prefix_root),
+            element._namescope.naming_stamp,
+            element._namescope.full_prefix(prefix_root),
             self_close,
             pretty_print,
             precision,
@@ -444,13 +581,15 @@ def short_string(element: Element) -> str:
         name = element._attributes.get("model")
         head = f'<mujoco model="{_escape(name)}"' if name is not None else "<mujoco"
     elif type(element) is AttachmentFrame:
-        static, _ = writer.cached_attributes(element)
+        static = writer.static_text(element)
         head = f'<body name="{_escape(element.prefixed_identifier(element._root))}"{static}'
     elif tag == constants.DEFAULT:
         identifier = element._attributes.get("class")
         head = f'<default class="{_escape(identifier)}"' if identifier else "<default"
     else:
-        head, _ = writer.head(element, "", None, None)
+        writer.shallow = True
+        writer.element(element, 0, "", None)
+        return "".join(writer.out)
     return f"{head}>...</{tag}>" if element._children else f"{head}/>"
 
 
@@ -478,12 +617,16 @@ def collect_assets(root: RootElement) -> dict[str, bytes]:
     assets = {}
     for model in _models_below(root):
         prefix = model._namescope.full_prefix(root)
-        for element in model._iter_own_tree():
+        # Depth first in document order, skipping subtrees that cannot hold files.
+        stack = [model]
+        while stack:
+            element = stack.pop()
             spec_attributes = element._spec.attributes
             for name, value in element._attributes.items():
                 if isinstance(value, Asset) and spec_attributes[name].type.kind == _FILE:
                     value = _file_asset(element, value, prefix)
                     assets[value.get_vfs_filename()] = value.contents
+            stack.extend([c for c in reversed(element._children) if c._spec.holds_files])
     return assets
 
 
