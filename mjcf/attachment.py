@@ -35,6 +35,14 @@ class AttachmentFrame(Element):
         prefix = self._root._namescope.full_prefix(prefix_root)
         return prefix + self._attached._namescope.name + constants.PREFIX_SEPARATOR
 
+    def unnamed_joint(self) -> Element | None:
+        """The first unnamed joint or freejoint of this frame, which is named after the frame
+        ('child/') in the compiled model, as dm_control names it."""
+        for child in self._children:
+            if child._spec.namespace == constants.JOINT and "name" not in child._attributes:
+                return child
+        return None
+
     def _describe(self) -> str:
         return f"<attachment frame of model {self._attached._namescope.name!r}>"
 
@@ -85,10 +93,11 @@ def attach(site_or_body: Element, model: RootElement) -> AttachmentFrame:
         ancestor = ancestor._frame._root if ancestor._frame is not None else None
     name = model._namescope.name
     if parent_model._attached_model(name) is not None:
-        raise ValueError(
-            f"duplicate identifier: a model named {name!r} is already attached to model "
-            f"{parent_model._namescope.name!r}; give the new model another name"
-        )
+        # As dm_control does: the newcomer is renamed 'name_1', 'name_2', ...
+        suffix = 1
+        while parent_model._attached_model(f"{name}_{suffix}") is not None:
+            suffix += 1
+        model._set_attribute("model", f"{name}_{suffix}")
     _check_global_options(parent_model.root_model, model)
 
     body = where._parent if where._spec.name == "site" else where

@@ -16,6 +16,7 @@ NAME = "name"
 # Tags with a special meaning.
 ACTUATOR = "actuator"
 BODY = "body"
+JOINT = "joint"
 DEFAULT = "default"
 MESH = "mesh"
 SITE = "site"

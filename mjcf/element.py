@@ -155,6 +155,13 @@ class Element:
         name = self._attributes.get("name")
         if name is not None:
             return prefix + name
+        return self._generated_name(prefix)
+
+    def _generated_name(self, prefix: str) -> str:
+        """The name written for this unnamed element when its model's prefix is `prefix`."""
+        frame_joint = getattr(self._parent, "unnamed_joint", None)
+        if frame_joint is not None and frame_joint() is self:
+            return prefix + self._parent._attached._namescope.name + _SEP
         return (prefix or _SEP) + self._unnamed_id()
 
     def _unnamed_id(self) -> str:
@@ -674,6 +681,11 @@ class RootElement(Element):
     def parent_model(self) -> RootElement | None:
         """The model this one is attached to, or None."""
         return self._frame._root if self._frame is not None else None
+
+    def prefixed_identifier(self, prefix_root=None) -> str:
+        """This model's scope prefix as seen from `prefix_root` ('' for the model itself,
+        'arm/hand/' for a hand attached to an arm attached to `prefix_root`)."""
+        return self._namescope.full_prefix(prefix_root)
 
     @property
     def root_model(self) -> RootElement:

@@ -44,6 +44,8 @@ def lookup(root: RootElement, namespace: str, identifier: str) -> Element | None
             return None
         if not rest and namespace in (constants.BODY, constants.ATTACHMENT_FRAME):
             return model._frame
+        if not rest and namespace == constants.JOINT:
+            return model._frame.unnamed_joint() if model._frame is not None else None
         root = model
         identifier = rest
     if namespace == constants.ATTACHMENT_FRAME:

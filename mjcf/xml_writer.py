@@ -244,8 +244,8 @@ class _Writer:
                     scoped -= 1
                     head = f'<{spec.name} name="{_escape(prefix + identifier)}"{static}'
                 elif self.full:
-                    auto_id = element._auto_id or element._unnamed_id()
-                    head = f'<{spec.name} name="{prefix or _SEP}{auto_id}"{static}'
+                    generated = element._generated_name(prefix)
+                    head = f'<{spec.name} name="{generated}"{static}'
                 else:
                     head = f"<{spec.name}{static}"
             else:
@@ -529,7 +529,7 @@ def _scoped_identifier(target: Element, prefix: str) -> str:
     name = target._attributes.get("name")
     if name is not None:
         return prefix + name
-    return (prefix or _SEP) + target._unnamed_id()
+    return target._generated_name(prefix)
 
 
 def element_to_string(

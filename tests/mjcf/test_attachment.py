@@ -170,10 +170,41 @@ def test_attaching_parent_below_its_child_is_an_error(scene):
         arm.find("site", "tip").attach(scene)
 
 
-def test_two_models_with_same_name_cannot_share_a_parent(scene):
-    scene.attach(_arm("arm"))
-    with pytest.raises(ValueError, match="duplicate identifier.*'arm'"):
-        scene.attach(_arm("arm"))
+def test_models_with_the_same_name_are_renamed_with_a_suffix_on_attach(scene):
+    first, second, third = _arm("arm"), _arm("arm"), _arm("arm")
+    for arm in (first, second, third):
+        scene.attach(arm)
+    assert [first.model, second.model, third.model] == ["arm", "arm_1", "arm_2"]
+    compiled = mujoco.MjModel.from_xml_string(scene.to_xml_string(), scene.get_assets())
+    for prefix in ("arm/", "arm_1/", "arm_2/"):
+        assert mujoco.mj_name2id(compiled, mujoco.mjtObj.mjOBJ_BODY, prefix) >= 0
+
+
+def test_renaming_an_attached_model_to_a_sibling_name_is_an_error(scene):
+    scene.attach(_arm("left"))
+    right = _arm("right")
+    scene.attach(right)
+    with pytest.raises(ValueError, match="duplicate identifier.*'left'"):
+        right.model = "left"
+
+
+def test_unnamed_frame_joint_is_named_after_its_frame(scene):
+    arm = _arm("arm")
+    frame = scene.attach(arm)
+    first = frame.add("joint", type="slide")
+    second = frame.add("joint", type="hinge")
+    assert first.full_identifier == "arm/"
+    assert scene.find("joint", "arm/") is first
+    compiled = mujoco.MjModel.from_xml_string(scene.to_xml_string(), scene.get_assets())
+    assert mujoco.mj_name2id(compiled, mujoco.mjtObj.mjOBJ_JOINT, "arm/") >= 0
+    assert mujoco.mj_name2id(compiled, mujoco.mjtObj.mjOBJ_JOINT, second.full_identifier) >= 0
+
+
+def test_frame_freejoint_reads_through_named_indexing_by_the_frame_name(scene):
+    arm = _arm("arm")
+    scene.attach(arm).add("freejoint")
+    physics = mjcf.Physics.from_mjcf_model(scene)
+    assert physics.named.data.qpos["arm/"].shape == (7,)
 
 
 def test_conflicting_global_options_are_an_error(scene):
@@ -299,3 +330,13 @@ def test_skin_bones_follow_the_scoped_body_names(scene):
     assert model.skin_bonebodyid[0] == model.body("creature/torso").id
     alone = _compile(creature)
     assert alone.skin_bonebodyid[0] == alone.body("torso").id
+
+
+def test_root_full_identifier_is_its_scope_prefix(scene):
+    arm = _arm("arm")
+    hand = _arm("hand")
+    scene.attach(arm)
+    arm.attach(hand)
+    assert scene.full_identifier == ""
+    assert arm.full_identifier == "arm/"
+    assert hand.full_identifier == "arm/hand/"
