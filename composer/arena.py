@@ -16,11 +16,11 @@ class Arena(Entity):
 
     Args (to the constructor):
       name: the model name, which scopes nothing (the arena is the root) but names
-        the scene; defaults to 'arena'.
+        the scene; defaults to 'base', as in dm_control.
     """
 
     def _build(self, name: str | None = None) -> None:
-        self._mjcf_root = mjcf.RootElement(model=name or "arena")
+        self._mjcf_root = mjcf.RootElement(model=name or "base")
         root = self._mjcf_root
         root.compiler.set_attributes(angle="radian", boundmass=1e-5, boundinertia=1e-11)
         root.option.set_attributes(

@@ -377,7 +377,8 @@ class Element:
             raise RuntimeError(f"{self._describe()} has been removed from its model")
         child_spec = self._allowed_children().get(element_name)
         if child_spec is None:
-            raise ValueError(
+            # AttributeError, as dm_control raises for a tag that is not a valid child.
+            raise AttributeError(
                 f"{self._describe()} cannot have a child <{element_name}>"
                 f"{_close_matches(element_name, self._allowed_children())}; allowed: "
                 f"{', '.join(sorted(self._allowed_children()))}"
@@ -509,10 +510,14 @@ class Element:
         immediate_children_only: bool = False,
         exclude_attachments: bool = False,
     ) -> list[Element]:
-        """All elements of `namespace` in this subtree, in model order.
+        """All elements of `namespace` below this element (itself excluded), in model order.
 
-        Attached models are searched too unless `exclude_attachments`; attachment frames
-        count as bodies and are found under the 'attachment_frame' namespace.
+        Attached models are searched too unless `exclude_attachments`: their bodies where
+        they are attached, and, when searching a whole model or one of its top-level sections
+        (`root.actuator`, `root.asset`, ...), the same sections of every attached model.
+        Default classes of attached models are not included (their classes are scoped
+        separately). Attachment frames count as bodies and are found under the
+        'attachment_frame' namespace.
         """
         if namespace == "keyframe":
             namespace = "key"
@@ -522,9 +527,14 @@ class Element:
                 if _matches(child, namespace):
                     found.append(child)
             return found
-        self._collect(namespace, exclude_attachments, found)
-        if self is self._root and not exclude_attachments:
-            self._collect_sections_of_attachments(namespace, found)
+        self._collect_children(namespace, exclude_attachments, found)
+        if exclude_attachments or namespace == constants.DEFAULT:
+            return found
+        root = self._root
+        if self is root:
+            root._collect_sections_of_attachments(namespace, found, None)
+        elif self._parent is root and self._spec.name != constants.WORLDBODY:
+            root._collect_sections_of_attachments(namespace, found, self._spec.name)
         return found
 
     def _collect(self, namespace, exclude_attachments, found) -> None:
@@ -623,9 +633,7 @@ def _frame_of(element):
 def _matches(element: Element, namespace: str) -> bool:
     if namespace == constants.ATTACHMENT_FRAME:
         return getattr(element, "_attached", None) is not None
-    return registry_namespace(element._spec) == namespace and not (
-        namespace == constants.DEFAULT and element._parent is element._root
-    )
+    return registry_namespace(element._spec) == namespace
 
 
 class RootElement(Element):
@@ -728,13 +736,16 @@ class RootElement(Element):
                 return frame._attached
         return None
 
-    def _collect_sections_of_attachments(self, namespace, found) -> None:
+    def _collect_sections_of_attachments(self, namespace, found, section_tag) -> None:
+        """Adds matches from the top-level sections of attached models (all but worldbody,
+        whose contents hang below attachment frames), or only from `section_tag` ones."""
         for frame in self._frames:
             model = frame._attached
             for section in model._children:
-                if section._spec.name != constants.WORLDBODY:
+                tag = section._spec.name
+                if tag != constants.WORLDBODY and section_tag in (None, tag):
                     section._collect_children(namespace, False, found)
-            model._collect_sections_of_attachments(namespace, found)
+            model._collect_sections_of_attachments(namespace, found, section_tag)
 
     def attach(self, attachment: RootElement):
         """Attaches model `attachment` to this model's worldbody; returns its frame."""

@@ -17,6 +17,25 @@ from mjcf.field_layout import ModelLayout
 
 NamedIndexStructs = collections.namedtuple("NamedIndexStructs", ["model", "data"])
 
+Axes = collections.namedtuple("Axes", ["row", "col"], defaults=[None])
+Axes.__doc__ = "The row and column axes of a field (``FieldIndexer.axes``); col is None for 1-D."
+
+
+class Axis:
+    """One axis of a field: ``names`` lists the labels it accepts, or is None when unnamed.
+
+    For rows, ``names`` holds one name per object of the field's family in id order ('' for
+    unnamed objects), also when an object owns several rows (``qpos`` of a free joint).
+    """
+
+    __slots__ = ("names",)
+
+    def __init__(self, names):
+        self.names = names
+
+    def __repr__(self):
+        return f"Axis(names={self.names!r})"
+
 
 class _Rows:
     """Converts row keys of one field: names to indices, everything else passed through."""
@@ -33,6 +52,14 @@ class _Rows:
         if isinstance(key, (list, np.ndarray)) and len(key) and _is_name(key[0]):
             return self._layout.multi_index(self._rule, [self._id(name) for name in key])
         return key
+
+    def names(self) -> list | None:
+        """One name per object of the family, in id order; None for unnamed rows."""
+        family = self._family
+        if family is None:
+            return None
+        layout = self._layout
+        return [layout.object_name(family, i) for i in range(layout.object_count(family))]
 
     def labels(self, length: int) -> list:
         """The object name of each of ``length`` rows ('' where unknown)."""
@@ -74,7 +101,9 @@ class FieldIndexer:
     """One MuJoCo array field, indexable by object names as well as by integers.
 
     Reading returns what NumPy indexing of the field returns (views for names of objects
-    with consecutive rows); assignment writes into MuJoCo's memory.
+    with consecutive rows); assignment writes into MuJoCo's memory. Other attributes are
+    those of the NumPy array (``shape``, ``dtype``, ``copy()``, ...); ``axes`` gives the row
+    and column labels.
     """
 
     __slots__ = ("_struct", "_name", "_array", "_rows")
@@ -96,6 +125,24 @@ class FieldIndexer:
 
     def __setitem__(self, key, value):
         self.field[self._convert(key)] = value
+
+    def __getattr__(self, name):
+        if name.startswith("_"):
+            raise AttributeError(name)
+        return getattr(self.field, name)
+
+    def __dir__(self):
+        return sorted(set(super().__dir__()) | set(dir(self.field)))
+
+    @property
+    def axes(self) -> Axes:
+        """``Axes(row, col)``: row labels (object names) and, for 2-D fields, column labels."""
+        array = self.field
+        row = Axis(self._rows.names())
+        if array.ndim < 2:
+            return Axes(row)
+        columns = field_layout.column_names(self._name, array.shape[1])
+        return Axes(row, Axis(None if columns is None else list(columns)))
 
     def __len__(self):
         return len(self.field)
@@ -133,18 +180,26 @@ class FieldIndexer:
     def __repr__(self):
         array = self.field
         labels = self._rows.labels(len(array))
-        rows = array.reshape(len(array), int(np.prod(array.shape[1:])))
         columns = field_layout.column_names(self._name, array.shape[1]) if array.ndim > 1 else None
         name_width = max([len(label) for label in labels] + [0])
         index_width = len(str(max(len(array) - 1, 0)))
         lines = [f"FieldIndexer({self._name}):"]
         if columns:
-            header = " ".join(f"{column:>10}" for column in columns)
-            lines.append(f"{'':{index_width + name_width + 4}}{header}")
-        for row, (label, values) in enumerate(zip(labels, rows)):
-            text = " ".join(f"{value:>10.4g}" for value in values)
-            lines.append(f"{row:>{index_width}} {label:>{name_width}} [ {text} ]")
+            width = max(max(len(column) for column in columns), 9) + 1
+            header = "".join(f"{column:<{width}}" for column in columns)
+            lines.append(" " * (index_width + name_width + 4) + header)
+        if not len(array):
+            lines.append("(empty)")
+        for row, (label, values) in enumerate(zip(labels, array)):
+            text = np.array2string(
+                np.atleast_1d(values), suppress_small=True, formatter={"float_kind": _format_float}
+            )
+            lines.append(f"{row:>{index_width}} {label:>{name_width}} {text}")
         return "\n".join(lines)
+
+
+def _format_float(value) -> str:
+    return f"{value: < 9.3g}"
 
 
 class StructIndexer:

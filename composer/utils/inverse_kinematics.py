@@ -8,6 +8,7 @@ from collections.abc import Sequence
 
 import mujoco
 import numpy as np
+from absl import logging
 
 IKResult = collections.namedtuple("IKResult", ["qpos", "err_norm", "steps", "success"])
 
@@ -34,12 +35,23 @@ def _dof_indices(model: mujoco.MjModel, joint_names) -> np.ndarray | slice:
     return np.concatenate(indices) if indices else np.zeros(0, dtype=int)
 
 
-def _solve_update(jac: np.ndarray, err: np.ndarray, regularization: float) -> np.ndarray:
-    """Returns the joint step minimising |jac @ step - err|^2 + regularization * |step|^2."""
-    hessian = jac.T @ jac
-    gradient = jac.T @ err
-    if regularization > 0:
-        hessian[np.diag_indices_from(hessian)] += regularization
+def nullspace_method(
+    jac_joints: np.ndarray, delta: np.ndarray, regularization_strength: float = 0.0
+) -> np.ndarray:
+    """Returns the joint step `dq` minimising |jac_joints @ dq - delta|^2 + r * |dq|^2.
+
+    Args:
+      jac_joints: (nrows, njoints) Jacobian of the task coordinates w.r.t. the joints.
+      delta: (nrows,) desired change of the task coordinates.
+      regularization_strength: the damping `r`; 0 gives the least-squares solution.
+
+    Returns:
+      The (njoints,) joint step.
+    """
+    hessian = jac_joints.T @ jac_joints
+    gradient = jac_joints.T @ delta
+    if regularization_strength > 0:
+        hessian[np.diag_indices_from(hessian)] += regularization_strength
         return np.linalg.solve(hessian, gradient)
     return np.linalg.lstsq(hessian, gradient, rcond=None)[0]
 
@@ -157,7 +169,7 @@ def qpos_from_site_pose(
             break
         mujoco.mj_jacSite(model, data, jac_pos, jac_rot, site_id)
         regularization = regularization_strength if err_norm > regularization_threshold else 0.0
-        update = _solve_update(jac[:, dof_indices], err, regularization)
+        update = nullspace_method(jac[:, dof_indices], err, regularization)
         update_norm = np.linalg.norm(update)
         if update_norm == 0.0 or err_norm > progress_thresh * update_norm:
             break
@@ -167,5 +179,7 @@ def qpos_from_site_pose(
         mujoco.mj_integratePos(model, data.qpos, update_nv, 1.0)
         update_kinematics()
 
+    if not success and steps == max_steps - 1:
+        logging.warning("Failed to converge after %i steps: err_norm=%3g", steps, err_norm)
     qpos = data.qpos if inplace else data.qpos.copy()
     return IKResult(qpos=qpos, err_norm=err_norm, steps=steps, success=success)

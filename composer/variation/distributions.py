@@ -67,6 +67,14 @@ class Distribution(base.Variation):
         if not self._has_variable_parameters:
             self._validate(*args, **kwargs)
 
+    def __getattr__(self, name):
+        # Keyword parameters read as attributes (`Uniform(0, 1).high`), as in dm_control.
+        if not name.startswith("_"):
+            kwargs = self.__dict__.get("_kwargs", {})
+            if name in kwargs:
+                return kwargs[name]
+        raise AttributeError(f"{type(self).__name__!r} object has no attribute {name!r}")
+
     def _validate(self, *args, **kwargs) -> None:
         """Raises ValueError for invalid parameter values; accepts everything by default."""
 

@@ -23,6 +23,10 @@ def test_arena_compiles_with_its_name_and_a_2ms_timestep():
     assert physics.timestep() == 0.002
 
 
+def test_arena_model_is_named_base_by_default():
+    assert composer.Arena().mjcf_model.model == "base"
+
+
 def test_add_free_entity_gives_the_entity_six_degrees_of_freedom():
     arena, box = composer.Arena(), Box()
     frame = arena.add_free_entity(box)

@@ -105,7 +105,7 @@ def test_frame_joints_use_parent_defaults(scene):
 def test_frame_accepts_only_joints_and_inertial(scene):
     frame = scene.attach(_arm())
     frame.add("inertial", mass=1, pos=[0, 0, 0])
-    with pytest.raises(ValueError, match="cannot have a child <geom>"):
+    with pytest.raises(AttributeError, match="cannot have a child <geom>"):
         frame.add("geom")
 
 
@@ -124,6 +124,21 @@ def test_find_all_sees_attached_elements_unless_excluded(scene):
     assert names == ["arm/shoulder", "arm/twist"]
     assert scene.find_all("joint", exclude_attachments=True) == []
     assert [a.full_identifier for a in scene.find_all("actuator")] == ["arm/drive"]
+
+
+def test_find_all_in_a_section_includes_that_section_of_attached_models(scene):
+    scene.actuator.add("motor", name="own", joint=scene.worldbody.add("body").add("joint"))
+    scene.attach(_arm())
+    assert [a.full_identifier for a in scene.actuator.find_all("actuator")] == ["own", "arm/drive"]
+    assert [s.full_identifier for s in scene.sensor.find_all("sensor")] == ["arm/angle"]
+    assert scene.actuator.find_all("actuator", exclude_attachments=True) == [
+        scene.find("actuator", "own")
+    ]
+
+
+def test_find_all_default_leaves_out_attached_models_classes(scene):
+    scene.attach(_arm())
+    assert [d.dclass for d in scene.find_all("default")] == [None]
 
 
 def test_parent_elements_do_not_list_child_elements(scene):

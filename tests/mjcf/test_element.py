@@ -126,7 +126,7 @@ def test_unknown_attribute_in_add_is_rejected():
 
 
 def test_unknown_child_tag_suggests_close_matches():
-    with pytest.raises(ValueError, match=r"<worldbody> cannot have a child <bodi>.*'body'"):
+    with pytest.raises(AttributeError, match=r"<worldbody> cannot have a child <bodi>.*'body'"):
         mjcf.RootElement().worldbody.add("bodi")
 
 
@@ -199,6 +199,18 @@ def test_find_all_returns_elements_in_model_order(model):
     assert [j.name for j in joints] == ["hip", "knee"]
     torso = model.find("body", "torso")
     assert [b.name for b in torso.find_all("body", immediate_children_only=True)] == ["leg"]
+
+
+def test_find_all_on_an_element_excludes_the_element_itself(model):
+    torso = model.find("body", "torso")
+    assert [b.name for b in torso.find_all("body")] == ["leg"]
+
+
+def test_find_all_default_lists_the_root_default_class_first():
+    root = mjcf.RootElement()
+    root.default.add("default", dclass="big").add("default", dclass="bigger")
+    assert [d.dclass for d in root.find_all("default")] == [None, "big", "bigger"]
+    assert [d.dclass for d in root.default.find_all("default")] == ["big", "bigger"]
 
 
 def test_freejoint_is_found_as_joint():

@@ -173,8 +173,38 @@ def test_repr_labels_every_row_of_a_multi_row_object(physics):
     assert sum("free" in line for line in lines) == 7
 
 
-def test_repr_of_an_empty_field_has_only_the_title(physics):
-    assert repr(physics.named.data.efc_force) == "FieldIndexer(efc_force):"
+def test_repr_of_an_empty_field_says_it_is_empty(physics):
+    assert repr(physics.named.data.efc_force) == "FieldIndexer(efc_force):\n(empty)"
+
+
+def test_repr_aligns_values_in_fixed_width_columns(physics):
+    rows = repr(physics.named.model.actuator_gear).splitlines()[1:]
+    assert rows == ["0 motor [ 1         0         0         0         0         0       ]"]
+
+
+def test_axes_row_names_list_one_name_per_object(physics):
+    assert physics.named.data.qpos.axes.row.names == ["free", "hinge", "ball_joint"]
+    assert physics.named.data.qpos.axes.col is None
+
+
+def test_axes_col_names_list_column_labels(physics):
+    axes = physics.named.data.xpos.axes
+    assert axes.row.names == ["world", "ball_body", "arm", "forearm", "target"]
+    assert axes.col.names == ["x", "y", "z"]
+
+
+def test_unlabelled_axes_have_no_names(physics):
+    assert physics.named.data.efc_force.axes.row.names is None
+    assert physics.named.data.xfrc_applied.axes.col.names is None
+
+
+def test_array_attributes_are_those_of_the_field(physics):
+    qpos = physics.named.data.qpos
+    assert qpos.shape == (physics.model.nq,)
+    assert qpos.dtype == np.float64
+    copied = qpos.copy()
+    copied[0] = 123.0
+    assert physics.data.qpos[0] != 123.0
 
 
 def test_dof_field_shadowed_in_bindings_is_still_named(physics):

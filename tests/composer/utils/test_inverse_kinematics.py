@@ -1,5 +1,7 @@
 """Tests for composer.utils.inverse_kinematics.qpos_from_site_pose on a 6-DOF arm."""
 
+from unittest import mock
+
 import mujoco
 import numpy as np
 import pytest
@@ -161,3 +163,24 @@ def test_joint_names_given_as_a_string_are_rejected(physics):
 def test_target_of_wrong_shape_is_rejected(physics):
     with pytest.raises(ValueError, match=r"target_pos: expected shape \(3,\), got \(2,\)"):
         inverse_kinematics.qpos_from_site_pose(physics, "tcp", target_pos=[0, 1])
+
+
+def test_nullspace_method_without_regularization_is_least_squares():
+    jac = np.array([[1.0, 0.0], [0.0, 2.0], [0.0, 0.0]])
+    step = inverse_kinematics.nullspace_method(jac, np.array([1.0, 2.0, 3.0]))
+    np.testing.assert_allclose(step, [1.0, 1.0])
+
+
+def test_nullspace_method_regularization_shrinks_the_step():
+    jac = np.eye(2)
+    step = inverse_kinematics.nullspace_method(jac, np.array([1.0, 2.0]), 1.0)
+    np.testing.assert_allclose(step, [0.5, 1.0])
+
+
+def test_running_out_of_steps_logs_a_warning(physics):
+    with mock.patch.object(inverse_kinematics.logging, "warning") as warning:
+        inverse_kinematics.qpos_from_site_pose(
+            physics, "tcp", target_pos=[2 * REACH, 0.0, 0.2], max_steps=3, progress_thresh=np.inf
+        )
+    warning.assert_called_once()
+    assert "Failed to converge after 2 steps" in warning.call_args[0][0] % warning.call_args[0][1:]

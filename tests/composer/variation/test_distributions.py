@@ -166,3 +166,15 @@ def test_parameters_incompatible_with_initial_value_shape_are_reported():
         ValueError, match=r"Uniform\(low=\[0, 0\], high=1\): cannot draw samples of shape \(3,\)"
     ):
         distributions.Uniform([0, 0], 1)(initial_value=np.zeros(3))
+
+
+def test_keyword_parameters_read_as_attributes():
+    uniform = distributions.Uniform(low=0.3, high=2.0)
+    assert uniform.low == 0.3
+    assert uniform.high == 2.0
+    assert distributions.Normal(loc=1.0, scale=0.5).scale == 0.5
+
+
+def test_unknown_attribute_is_an_attribute_error():
+    with pytest.raises(AttributeError, match="'Uniform' object has no attribute 'mean'"):
+        _ = distributions.Uniform().mean
