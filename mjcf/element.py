@@ -159,9 +159,10 @@ class Element:
 
     def _generated_name(self, prefix: str) -> str:
         """The name written for this unnamed element when its model's prefix is `prefix`."""
-        frame_joint = getattr(self._parent, "unnamed_joint", None)
-        if frame_joint is not None and frame_joint() is self:
-            return prefix + self._parent._attached._namescope.name + _SEP
+        if self._spec.namespace == constants.JOINT:
+            frame_joint = getattr(type(self._parent), "unnamed_joint", None)
+            if frame_joint is not None and frame_joint(self._parent) is self:
+                return prefix + self._parent._attached._namescope.name + _SEP
         return (prefix or _SEP) + self._unnamed_id()
 
     def _unnamed_id(self) -> str:
