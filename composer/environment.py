@@ -24,6 +24,9 @@ __all__ = [
 ]
 
 
+_FIRST, _MID, _LAST = dm_env.StepType.FIRST, dm_env.StepType.MID, dm_env.StepType.LAST
+
+
 class EpisodeInitializationError(RuntimeError):
     """Raised by a task or entity when it fails to set up an episode; reset may retry."""
 
@@ -210,6 +213,7 @@ class Environment(dm_env.Environment):
             self._physics = physics
             self._physics_proxy = weakref.proxy(physics)
             self._data = physics.data.ptr
+            self._ctrl = self._data.ctrl
             self._snapshot = ModelSnapshot(physics.model.ptr) if snapshots_supported() else None
         self._hooks.refresh_entity_hooks()
         self._run_after_compile_hooks()
@@ -296,7 +300,7 @@ class Environment(dm_env.Environment):
         self._observation_updater.reset(self._physics_proxy, self._random_state)
         self._reset_next_step = False
         return dm_env.TimeStep(
-            step_type=dm_env.StepType.FIRST,
+            step_type=_FIRST,
             reward=None,
             discount=None,
             observation=self._observation_updater.get_observation(),
@@ -319,10 +323,15 @@ class Environment(dm_env.Environment):
         physics = self._physics_proxy
         random_state = self._random_state
         updater = self._observation_updater
-        self._hooks.before_step(physics, action, random_state)
+        hooks = self._hooks
+        if hooks.task_sets_controls:
+            # What `Task.before_step` does, without its calls: the action is validated.
+            self._ctrl[...] = action
+        if hooks.has_before_step_hooks:
+            hooks.before_step(physics, action, random_state)
         updater.prepare_for_next_control_step()
         try:
-            if self._hooks.has_substep_hooks:
+            if hooks.has_substep_hooks:
                 unsampled_steps = self._substeps_with_hooks(action)
             else:
                 unsampled_steps = self._substeps_in_chunks()
@@ -330,20 +339,21 @@ class Environment(dm_env.Environment):
             if self._raise_exception_on_physics_error:
                 raise
             logging.warning("Physics error, ending the episode: %s", error)
-            self._hooks.after_step(physics, random_state)
+            hooks.after_step(physics, random_state)
             updater.update()
             self._reset_next_step = True
-            return dm_env.TimeStep(dm_env.StepType.LAST, 0.0, 0.0, updater.get_observation())
-        self._hooks.after_step(physics, random_state)
+            return dm_env.TimeStep(_LAST, 0.0, 0.0, updater.get_observation())
+        if hooks.has_after_step_hooks:
+            hooks.after_step(physics, random_state)
         updater.update(unsampled_steps)
         task = self._task
         reward = task.get_reward(physics)
         discount = task.get_discount(physics)
         if task.should_terminate_episode(physics) or self._data.time >= self._time_limit:
             self._reset_next_step = True
-            step_type = dm_env.StepType.LAST
+            step_type = _LAST
         else:
-            step_type = dm_env.StepType.MID
+            step_type = _MID
         return dm_env.TimeStep(step_type, reward, discount, updater.get_observation())
 
     def _substeps_in_chunks(self) -> int:

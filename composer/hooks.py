@@ -20,6 +20,7 @@ _BASE_NO_OPS = frozenset(
     [getattr(Entity, name) for name in HOOK_NAMES]
     + [getattr(Task, name) for name in HOOK_NAMES if name != "before_step"]
 )
+_SETS_CONTROLS = Task.before_step
 
 
 def _empty():
@@ -65,6 +66,11 @@ class EnvironmentHooks:
     do not: `before_step` and `before_substep` are called as
     `task_or_extra_hook(physics, action, random_state)` and
     `entity_hook(physics, random_state)`.
+
+    When the task keeps `Task.before_step`, which only writes the action into the
+    controls, `task_sets_controls` is True and `before_step` leaves that hook out: the
+    caller writes the controls itself, before calling `before_step` (when
+    `has_before_step_hooks`).
     """
 
     __slots__ = (
@@ -73,6 +79,9 @@ class EnvironmentHooks:
         "_chains",
         "has_substep_hooks",
         "has_after_compile_hooks",
+        "has_before_step_hooks",
+        "has_after_step_hooks",
+        "task_sets_controls",
     )
 
     def __init__(self, task):
@@ -84,9 +93,12 @@ class EnvironmentHooks:
     def refresh_entity_hooks(self) -> None:
         """Rescans the task and its entity tree for hooks that do something."""
         entities = list(self._task.root_entity.iter_entities())
+        task_before_step = self._task.before_step
+        self.task_sets_controls = getattr(task_before_step, "__func__", None) is _SETS_CONTROLS
         for name in HOOK_NAMES:
             task_hook = getattr(self._task, name)
-            task_hooks = () if _does_nothing(task_hook) else (task_hook,)
+            leave_out = name == "before_step" and self.task_sets_controls
+            task_hooks = () if leave_out or _does_nothing(task_hook) else (task_hook,)
             hooks = (getattr(entity, name) for entity in entities)
             entity_hooks = tuple(hook for hook in hooks if not _does_nothing(hook))
             self._chains[name] = _Chain(task_hooks, entity_hooks, self._extra_hooks[name])
@@ -113,6 +125,8 @@ class EnvironmentHooks:
         chains = self._chains
         self.has_substep_hooks = bool(chains["before_substep"].all or chains["after_substep"].all)
         self.has_after_compile_hooks = bool(chains["after_compile"].all)
+        self.has_before_step_hooks = bool(chains["before_step"].all)
+        self.has_after_step_hooks = bool(chains["after_step"].all)
 
     def _call_with_action(self, name: str, physics, action, random_state) -> None:
         chain = self._chains[name]

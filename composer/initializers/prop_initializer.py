@@ -135,7 +135,11 @@ class PropPlacer(initializer.Initializer):
 
     def _place_all(self, physics, random_state, prop_geoms, ignored_geoms) -> None:
         model = physics.model.ptr
-        disabled = np.unique(np.concatenate(prop_geoms + ignored_geoms))
+        # The sorted distinct geom ids, through a mask: np.unique would import numpy.ma on
+        # first use (tens of milliseconds on an episode's first reset).
+        is_disabled = np.zeros(model.ngeom, dtype=bool)
+        is_disabled[np.concatenate(prop_geoms + ignored_geoms)] = True
+        disabled = np.flatnonzero(is_disabled)
         saved_contype = model.geom_contype[disabled].copy()
         saved_conaffinity = model.geom_conaffinity[disabled].copy()
         # Props not placed yet (and ignored entities) take no part in collision detection.

@@ -235,17 +235,35 @@ class LatestSampleBuffer:
     """A buffer of size 1 whose samples are never delayed.
 
     Reads like `Buffer(1, shape, dtype, ...)` fed only undelayed samples, with less work per
-    sample and a cheaper construction: the latest sample lives in one preallocated slot.
+    sample and a cheaper construction: the latest sample lives in one preallocated array,
+    `storage`. A caller may pass that array in (zero-filled here), to fill it directly.
+
+    Raises:
+      ValueError: if `storage` is not a C-contiguous array of the read shape and dtype.
     """
 
-    def __init__(self, shape, dtype, strip_singleton_buffer_dim: bool = False):
+    def __init__(self, shape, dtype, strip_singleton_buffer_dim: bool = False, storage=None):
         self._sample_shape = _as_shape(shape)
         self._dtype = np.dtype(dtype)
         self._shape = (
             self._sample_shape if strip_singleton_buffer_dim else (1,) + self._sample_shape
         )
-        self._whole = np.zeros(self._shape, self._dtype)
-        self._slot = self._whole.reshape(self._sample_shape)
+        if storage is None:
+            storage = np.zeros(self._shape, self._dtype)
+        elif (
+            not isinstance(storage, np.ndarray)
+            or storage.shape != self._shape
+            or storage.dtype != self._dtype
+            or not storage.flags.c_contiguous
+        ):
+            raise ValueError(
+                f"LatestSampleBuffer: storage must be a C-contiguous array of shape "
+                f"{self._shape} and dtype {self._dtype}, got {storage!r}"
+            )
+        else:
+            storage[...] = 0
+        self._whole = storage
+        self._slot = storage.reshape(self._sample_shape)
 
     @property
     def shape(self) -> tuple:
@@ -255,6 +273,16 @@ class LatestSampleBuffer:
     @property
     def dtype(self) -> np.dtype:
         return self._dtype
+
+    @property
+    def storage(self) -> np.ndarray:
+        """The array holding the latest sample; `read` returns a copy of it."""
+        return self._whole
+
+    @property
+    def sample_view(self) -> np.ndarray:
+        """`storage` in the shape of one sample (a view: writing it replaces the sample)."""
+        return self._slot
 
     def insert(self, timestamp, delay, value) -> None:
         """Replaces the held sample; `delay` must be 0 (see `Buffer.insert`)."""

@@ -74,6 +74,8 @@ class _EnabledObservable:
         "_last_scheduled",
         "_offsets_by_phase",
         "_period",
+        "is_gathered",
+        "writer",
     )
 
     def __init__(self, name, observable, physics, random_state, steps_per_control, strip, pad):
@@ -95,6 +97,8 @@ class _EnabledObservable:
             shape, dtype = value.shape, value.dtype
         else:
             shape, dtype = spec.shape, spec.dtype
+        self.writer = None
+        self.is_gathered = False
         if self.buffer_size == 1 and self._draw_delay is None and self.delay == 0:
             self.buffer = obs_buffer.LatestSampleBuffer(shape, dtype, strip)
         else:
@@ -136,6 +140,18 @@ class _EnabledObservable:
             self.buffer.insert(timestamp, delay, value)
         except obs_buffer.IncompatibleSampleError as exc:
             raise ValueError(f"observable {self.name!r}: {exc}") from None
+
+    @property
+    def keeps_one_sample(self) -> bool:
+        """Whether the buffer holds one undelayed sample, which can be written in place."""
+        return isinstance(self.buffer, obs_buffer.LatestSampleBuffer)
+
+    def direct_sampling_key(self) -> tuple:
+        """What the direct sampling of this observable depends on, besides the physics."""
+        interval = None if self.is_stochastic else self.update_interval
+        observable = self.observable
+        buffer = self.buffer
+        return observable, interval, observable.corruptor is None, buffer.shape, buffer.dtype
 
     def due_entry(self, delay) -> tuple:
         """What `Updater.update` needs to take one sample: (insert, sample, delay, name)."""
@@ -211,6 +227,121 @@ class _EnabledObservable:
         return specs.BoundedArray(shape, dtype, bounds[0], bounds[1], name=self.name)
 
 
+def _simulation_data(physics):
+    """The MuJoCo data a physics wraps now (a reload replaces it), or None."""
+    return getattr(getattr(physics, "data", None), "ptr", None)
+
+
+def _live_source(enabled, physics):
+    """(array, indices) of an observable whose value lives in `array[indices]`, or None.
+
+    Only observables with a fixed update interval and a source that matches their buffer
+    (a 1-D array of the buffer's dtype, indices of the sample's shape, in range) qualify.
+    """
+    if enabled.is_stochastic:
+        return None
+    source = enabled.observable.live_source(physics)
+    if source is None:
+        return None
+    array, indices = source
+    indices = np.asarray(indices)
+    buffer = enabled.buffer
+    sample_shape = buffer.sample_view.shape
+    if not (
+        isinstance(array, np.ndarray)
+        and array.ndim == 1
+        and array.dtype == buffer.dtype
+        and indices.shape == sample_shape
+        and indices.dtype.kind in "iu"
+    ):
+        return None
+    if indices.size:
+        lowest, highest = np.minimum.reduce(indices, None), np.maximum.reduce(indices, None)
+        if lowest < 0 or highest >= array.size:
+            return None
+    return array, indices
+
+
+class _Gather:
+    """Observables sampled together by one `take` from an array into their buffers.
+
+    Their values live in that array (see `Observable.live_source`) and they share an
+    update interval, so they are due at the same sub-steps. `take()` copies all of their
+    current values, in one call, into one block that holds their buffers' storage.
+    `leader_position` is the position of one of them among the directly sampled ones.
+    """
+
+    __slots__ = ("take", "leader_position")
+
+    def __init__(self, array: np.ndarray, members: list, buffers: list, strip: bool):
+        block = np.empty(sum(indices.size for _, _, indices in members), array.dtype)
+        start = 0
+        for position, enabled, indices in members:
+            end = start + indices.size
+            storage = block[start:end].reshape(enabled.buffer.shape)
+            buffers[position] = obs_buffer.LatestSampleBuffer(
+                indices.shape, array.dtype, strip, storage
+            )
+            start = end
+        indices = np.concatenate([indices.ravel() for _, _, indices in members])
+        # mode='clip' writes straight into `block`; the indices are known to be in range.
+        self.take = functools.partial(array.take, indices, 0, block, "clip")
+        self.leader_position = members[0][0]
+
+
+class _DirectSampling:
+    """How the observables that keep one undelayed sample are sampled straight into their
+    buffers: gathers of live sources (one per source array and update interval) and
+    writers (see `Observable.observation_writer`).
+
+    Built for a physics and the observables' current options; `reset` reuses it while
+    those stay the same, with the same buffers (each episode's first sample refills them).
+    """
+
+    def __init__(self, physics, eligible: list, strip: bool):
+        self.physics = physics
+        self.data = _simulation_data(physics)
+        self.keys = [enabled.direct_sampling_key() for enabled in eligible]
+        self.buffers = [enabled.buffer for enabled in eligible]
+        self.writers = [None] * len(eligible)
+        groups = {}
+        for position, enabled in enumerate(eligible):
+            source = _live_source(enabled, physics)
+            if source is not None:
+                array, indices = source
+                key = array.__array_interface__["data"][0], array.dtype.str, array.size
+                group = groups.setdefault((key, enabled.update_interval), (array, []))
+                group[1].append((position, enabled, indices))
+        self.gathers = [
+            _Gather(array, members, self.buffers, strip) for array, members in groups.values()
+        ]
+        self.gathered = {position for _, members in groups.values() for position, _, _ in members}
+        for position, enabled in enumerate(eligible):
+            if position not in self.gathered:
+                buffer = self.buffers[position]
+                writer = enabled.observable.observation_writer(physics, buffer.sample_view)
+                self.writers[position] = writer
+
+    def matches(self, physics, eligible: list) -> bool:
+        if physics is not self.physics or _simulation_data(physics) is not self.data:
+            return False
+        if len(eligible) != len(self.keys):
+            return False
+        for enabled, (observable, *options) in zip(eligible, self.keys):
+            key = enabled.direct_sampling_key()
+            if key[0] is not observable or list(key[1:]) != options:
+                return False
+        return True
+
+    def apply(self, eligible: list) -> list:
+        """Gives `eligible` their buffers and writers; returns the gathers' (take, leader)."""
+        for position, enabled in enumerate(eligible):
+            enabled.buffer = self.buffers[position]
+            enabled.writer = self.writers[position]
+            enabled.is_gathered = position in self.gathered
+        return [(gather.take, eligible[gather.leader_position]) for gather in self.gathers]
+
+
 def _is_nested(observables) -> bool:
     if isinstance(observables, (list, tuple)):
         if all(isinstance(item, dict) for item in observables):
@@ -239,7 +370,10 @@ class Updater:
     (1..physics_steps_per_control_step) after which some observable must be sampled; with
     default options that is only the last one. A caller may step the physics several times
     and then call `update(num_steps=k)`, provided no skipped sub-step is in `sample_steps`;
-    observations are identical to calling `update()` after every sub-step.
+    observations are identical to calling `update()` after every sub-step. Observables that
+    keep one undelayed sample are sampled straight into their buffers, unless the physics
+    `is_dirty`: those with a live source (see `Observable.live_source`) by one gather per
+    MuJoCo array they read, those with a writer (`Observable.observation_writer`) by it.
     """
 
     def __init__(
@@ -258,6 +392,9 @@ class Updater:
         self._pad_with_initial_value = pad_with_initial_value
         self._enabled_structure = None
         self._enabled_list = ()
+        self._gathers = ()
+        self._direct_sampling = None
+        self._physics = None
         self._readers = ()
         self._plan_period = None
         self._step_counter = 0
@@ -306,9 +443,18 @@ class Updater:
                 dicts = [structure]
         self._enabled_structure = structure
         self._enabled_list = [enabled for d in dicts for enabled in d.values()]
-        self._readers = [
-            (type(d), list(d), [enabled.read_function() for enabled in d.values()]) for d in dicts
-        ]
+        # Direct sampling reads memory that is only up to date while the physics has no
+        # pending forward(), which a physics without `is_dirty` cannot tell.
+        self._gathers = []
+        if hasattr(physics, "is_dirty"):
+            eligible = [enabled for enabled in self._enabled_list if enabled.keeps_one_sample]
+            layout = self._direct_sampling
+            if layout is None or not layout.matches(physics, eligible):
+                layout = _DirectSampling(physics, eligible, self._strip_singleton_buffer_dim)
+                self._direct_sampling = layout
+            self._gathers = layout.apply(eligible)
+        self._physics = physics
+        self._readers = [self._reader(d) for d in dicts]
         if any(enabled.is_stochastic for enabled in self._enabled_list):
             self._plan_period = None
         else:
@@ -319,6 +465,18 @@ class Updater:
         self._reset_plan()
         for enabled in self._enabled_list:
             enabled.sample(0, enabled.next_delay())
+
+    @staticmethod
+    def _reader(enabled_dict) -> tuple:
+        """(dict type, names, read functions or None, storages or None) for one dict: the
+        storages of size-1 undelayed buffers are copied directly when all of them are such."""
+        enabled = list(enabled_dict.values())
+        if all(
+            isinstance(e.buffer, obs_buffer.LatestSampleBuffer) and e.aggregator is None
+            for e in enabled
+        ):
+            return type(enabled_dict), list(enabled_dict), None, [e.buffer.storage for e in enabled]
+        return type(enabled_dict), list(enabled_dict), [e.read_function() for e in enabled], None
 
     def _check_reset(self):
         if self._enabled_structure is None:
@@ -340,7 +498,8 @@ class Updater:
 
     def prepare_for_next_control_step(self) -> None:
         """Plans which sub-steps of the coming control step sample which observables."""
-        self._check_reset()
+        if self._enabled_structure is None:
+            self._check_reset()
         start = self._step_counter
         if self._plan_period is not None:
             phase = start % self._plan_period
@@ -357,12 +516,27 @@ class Updater:
         self._next_due = self._sample_steps[0] if self._sample_steps else _NEVER
 
     def _build_plan(self, start):
+        """Returns (sample steps, per sample step (fills, entries, all entries)): zero-argument
+        functions writing samples straight into buffers (gathers and writers), the due
+        entries of the other observables, and every due observable's entry in observable
+        order, which `update` samples one by one while the physics is dirty."""
         due = {}
         for enabled in self._enabled_list:
             for offset, delay in enabled.plan(start, self._steps):
-                due.setdefault(offset, []).append(enabled.due_entry(delay))
+                due.setdefault(offset, []).append((enabled, enabled.due_entry(delay)))
         sample_steps = tuple(sorted(due))
-        return sample_steps, tuple(tuple(due[offset]) for offset in sample_steps)
+        plan = []
+        for offset in sample_steps:
+            due_now = {id(enabled) for enabled, _ in due[offset]}
+            fills = [take for take, leader in self._gathers if id(leader) in due_now]
+            fills += [e.writer for e, _ in due[offset] if e.writer is not None]
+            entries = tuple(
+                entry
+                for enabled, entry in due[offset]
+                if not enabled.is_gathered and enabled.writer is None
+            )
+            plan.append((tuple(fills), entries, tuple(entry for _, entry in due[offset])))
+        return sample_steps, tuple(plan)
 
     def update(self, num_steps: int = 1) -> None:
         """Records that `num_steps` physics steps have passed and samples what is now due."""
@@ -380,8 +554,16 @@ class Updater:
                 f"{self._sample_steps})"
             )
         index = self._due_index
+        fills, entries, all_entries = self._due[index]
+        if fills:
+            if self._physics.is_dirty:
+                # Bindings run forward() on the first read of a derived quantity: sample
+                # through them, in order, as without fills.
+                entries, fills = all_entries, ()
+            for fill in fills:
+                fill()
         try:
-            for insert, sample, delay, name in self._due[index]:  # noqa: B007 (see except)
+            for insert, sample, delay, name in entries:  # noqa: B007 (see except)
                 insert(counter, delay, sample())
         except obs_buffer.IncompatibleSampleError as exc:
             raise ValueError(f"observable {name!r}: {exc}") from None
@@ -391,12 +573,22 @@ class Updater:
 
     def get_observation(self):
         """Returns new arrays the caller owns, in the structure of `observables`."""
-        self._check_reset()
-        now = self._step_counter
+        if self._enabled_structure is None:
+            self._check_reset()
         if not self._is_nested:
-            dict_type, names, reads = self._readers[0]
-            return dict_type(zip(names, [read(now) for read in reads]))
+            return self._observation_dict(*self._readers[0])
         return type(self._enabled_structure)(
-            dict_type(zip(names, [read(now) for read in reads]))
-            for dict_type, names, reads in self._readers
+            self._observation_dict(*reader) for reader in self._readers
         )
+
+    def _observation_dict(self, dict_type, names, reads, storages):
+        # Item by item: an OrderedDict fills faster this way than from an iterable of pairs.
+        observation = dict_type()
+        if reads is None:
+            for name, storage in zip(names, storages):
+                observation[name] = storage.copy()
+        else:
+            now = self._step_counter
+            for name, read in zip(names, reads):
+                observation[name] = read(now)
+        return observation

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
 _DEFAULT_VALUE_AT_MARGIN = 0.1
@@ -68,11 +70,51 @@ SIGMOIDS = tuple(_SIGMOIDS)
 _SCALAR_TYPES = (int, float, np.integer, np.floating)
 
 
-def _sigmoids(x, value_at_1: float, sigmoid: str):
-    """Evaluates `sigmoid` at `x` (distance in units of the margin), equal to `value_at_1` at 1.
+def _scalar_gaussian(x, value_at_1):
+    scaled = x * math.sqrt(-2.0 * math.log(value_at_1))
+    return math.exp(-0.5 * (scaled * scaled))
 
-    Every sigmoid equals 1 at x=0, decreases with |x|, and equals `value_at_1` at |x|=1.
-    """
+
+def _scalar_long_tail(x, value_at_1):
+    scaled = x * math.sqrt(1.0 / value_at_1 - 1.0)
+    return 1.0 / (scaled * scaled + 1.0)
+
+
+def _scalar_reciprocal(x, value_at_1):
+    return 1.0 / (abs(x) * (1.0 / value_at_1 - 1.0) + 1.0)
+
+
+def _scalar_cosine(x, value_at_1):
+    scaled = x * (math.acos(2.0 * value_at_1 - 1.0) / math.pi)
+    return (1.0 + math.cos(math.pi * scaled)) / 2.0 if abs(scaled) < 1.0 else 0.0
+
+
+def _scalar_linear(x, value_at_1):
+    scaled = x * (1.0 - value_at_1)
+    return 1.0 - scaled if abs(scaled) < 1.0 else 0.0
+
+
+def _scalar_quadratic(x, value_at_1):
+    scaled = x * math.sqrt(1.0 - value_at_1)
+    return 1.0 - scaled * scaled if abs(scaled) < 1.0 else 0.0
+
+
+# The same sigmoids on one Python float, with the `math` module: a reward computed from one
+# distance per step would spend most of its time in NumPy's per-call overhead. The
+# hyperbolic and tanh-squared ones keep NumPy's functions, whose tails libm's do not match.
+_SCALAR_SIGMOIDS = {
+    "gaussian": _scalar_gaussian,
+    "hyperbolic": _hyperbolic,
+    "long_tail": _scalar_long_tail,
+    "reciprocal": _scalar_reciprocal,
+    "cosine": _scalar_cosine,
+    "linear": _scalar_linear,
+    "quadratic": _scalar_quadratic,
+    "tanh_squared": _tanh_squared,
+}
+
+
+def _check_value_at_margin(value_at_1: float, sigmoid: str) -> None:
     if sigmoid in _BOUNDED_SUPPORT:
         if not 0.0 <= value_at_1 < 1.0:
             raise ValueError(
@@ -84,6 +126,14 @@ def _sigmoids(x, value_at_1: float, sigmoid: str):
             f"tolerance: value_at_margin for sigmoid {sigmoid!r} must be in (0, 1), "
             f"got {value_at_1}"
         )
+
+
+def _sigmoids(x, value_at_1: float, sigmoid: str):
+    """Evaluates `sigmoid` at `x` (distance in units of the margin), equal to `value_at_1` at 1.
+
+    Every sigmoid equals 1 at x=0, decreases with |x|, and equals `value_at_1` at |x|=1.
+    """
+    _check_value_at_margin(value_at_1, sigmoid)
     return _SIGMOIDS[sigmoid](x, value_at_1)
 
 
@@ -126,8 +176,9 @@ def tolerance(
             return 1.0
         if margin == 0:
             return 0.0
+        _check_value_at_margin(value_at_margin, sigmoid)
         distance = (lower - x if x < lower else x - upper) / margin
-        return float(_sigmoids(distance, value_at_margin, sigmoid))
+        return float(_SCALAR_SIGMOIDS[sigmoid](float(distance), float(value_at_margin)))
     x_array = np.asarray(x)
     in_bounds = (lower <= x_array) & (x_array <= upper)
     if margin == 0:

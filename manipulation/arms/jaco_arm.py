@@ -1,6 +1,8 @@
 """JacoArm: the six-joint Jaco-style arm as a composer robot."""
 
-import mujoco
+import math
+import struct
+
 import numpy as np
 
 import composer
@@ -67,6 +69,24 @@ class JacoArm(composer.Robot):
         return self._wrist_site
 
 
+class _Gathered:
+    """`array[indices]` read afresh by every `tolist()`."""
+
+    def __init__(self, array: np.ndarray, indices: np.ndarray):
+        self._array, self._indices = array, indices
+
+    def tolist(self) -> list:
+        return self._array.take(self._indices).tolist()
+
+
+def _consecutive_view(array: np.ndarray, indices: np.ndarray):
+    """`array[indices]` as a view when the indices are consecutive, else None."""
+    first = int(indices[0])
+    if np.array_equal(indices, np.arange(first, first + len(indices))):
+        return array[first : first + len(indices)]
+    return None
+
+
 class _JointAngleSinCos(observable.Observable):
     """The sine and cosine of hinge joint angles, as a (n_joints, 2) array."""
 
@@ -76,20 +96,32 @@ class _JointAngleSinCos(observable.Observable):
             update_interval=1, buffer_size=None, delay=None, aggregator=None, corruptor=None
         )
 
-    def _callable(self, physics):
-        model = physics.model.ptr
-        ids = [
-            mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_JOINT, joint.full_identifier)
-            for joint in self._joints
-        ]
+    def _writer(self, physics, out):
         qpos = physics.data.ptr.qpos
-        addresses = model.jnt_qposadr[ids]
-        out = np.empty((len(ids), 2))
+        addresses = np.array(physics.bind(self._joints).qposadr)
+        angles = _consecutive_view(qpos, addresses)
+        if angles is None:
+            angles = _Gathered(qpos, addresses)
+        # A few angles: Python's math module and one struct write into `out` cost less than
+        # NumPy's ufunc machinery (math.sin and np.sin are both the C library's sin).
+        pack = struct.Struct(f"{2 * len(addresses)}d").pack_into
+        target = memoryview(out)
+        sin, cos = math.sin, math.cos
+
+        def write():
+            values = []
+            for angle in angles.tolist():
+                values += (sin(angle), cos(angle))
+            pack(target, 0, *values)
+
+        return write
+
+    def _callable(self, physics):
+        out = np.empty((len(self._joints), 2))
+        write = self._writer(physics, out)
 
         def read():
-            angles = qpos.take(addresses)
-            np.sin(angles, out=out[:, 0])
-            np.cos(angles, out=out[:, 1])
+            write()
             return out
 
         return read
@@ -105,23 +137,30 @@ class _JointTorques(observable.Observable):
             update_interval=1, buffer_size=None, delay=None, aggregator=None, corruptor=None
         )
 
+    def _layout(self, physics) -> tuple[np.ndarray, np.ndarray]:
+        """(rows, axes), both (n_joints, 3): each sensor's rows in sensordata and each
+        joint's axis. The sensor frames are aligned with the joints' link frames, where the
+        axes live."""
+        rows = np.array(physics.bind(self._sensors).adr)[:, None] + np.arange(3)
+        return rows, np.array(physics.bind(self._joints).axis)
+
+    def _live_source(self, physics):
+        rows, axes = self._layout(physics)
+        if np.all((axes == 0.0) | (axes == 1.0)) and np.all(axes.sum(1) == 1.0):
+            # Each axis is a coordinate axis: each torque is one component of its sensor.
+            return physics.data.ptr.sensordata, rows[axes == 1.0]
+        return None
+
     def _callable(self, physics):
-        model = physics.model.ptr
-        joint_ids = [
-            mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_JOINT, joint.full_identifier)
-            for joint in self._joints
-        ]
-        sensor_ids = [
-            mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_SENSOR, sensor.full_identifier)
-            for sensor in self._sensors
-        ]
-        # The sensor frames are aligned with the joints' link frames, where the axes live.
-        rows = model.sensor_adr[sensor_ids][:, None] + np.arange(3)
-        axes = model.jnt_axis[joint_ids].copy()
+        rows, axes = self._layout(physics)
         sensordata = physics.data.ptr.sensordata
+        rows = rows.ravel()
+        products = np.empty(axes.shape)
+        out = np.empty(len(axes))
 
         def read():
-            return (sensordata.take(rows) * axes).sum(1)
+            np.multiply(sensordata.take(rows).reshape(axes.shape), axes, products)
+            return np.add.reduce(products, 1, None, out)
 
         return read
 

@@ -82,7 +82,7 @@ class ManipulationTask(composer.Task):
         )
         self._touch_watched = ()
         self._data = None
-        self._geom_codes = None
+        self._geom_codes = ()
 
     @property
     def root_entity(self) -> TableArena:
@@ -126,7 +126,7 @@ class ManipulationTask(composer.Task):
         for entity in self._touch_watched:
             codes[entity_geom_mask(physics, entity)] = 2
         codes[entity_geom_mask(physics, self._hand)] = 1
-        self._geom_codes = codes
+        self._geom_codes = codes.tolist()
 
     def initialize_episode(self, physics, random_state) -> None:
         self._tcp_initializer(physics, random_state)
@@ -136,5 +136,9 @@ class ManipulationTask(composer.Task):
         data = self._data
         if data.ncon == 0:
             return False
-        codes = self._geom_codes[data.contact.geom]
-        return bool((codes[:, 0] * codes[:, 1] == 2).any())
+        # A few dozen contacts at most: a Python loop beats NumPy's per-call overhead.
+        codes = self._geom_codes
+        for geom1, geom2 in data.contact.geom.tolist():
+            if codes[geom1] * codes[geom2] == 2:
+                return True
+        return False

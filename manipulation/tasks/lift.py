@@ -41,7 +41,8 @@ class Lift(base.ManipulationTask):
         self._prop_placer = initializers.PropPlacer(
             [prop], position=base.table_positions(rest_height), quaternion=base.random_yaw()
         )
-        self._vertex_ids = None
+        self._vertex_heights = None
+        self._site_xpos = None
 
     @property
     def prop(self) -> Prop:
@@ -49,15 +50,17 @@ class Lift(base.ManipulationTask):
 
     def after_compile(self, physics, random_state) -> None:
         super().after_compile(physics, random_state)
-        self._vertex_ids = np.asarray(physics.bind(self._prop.vertices).element_id)
-        self._site_xpos = self._data.site_xpos
+        # The heights of the prop's corners in the flattened site_xpos.
+        vertex_ids = np.asarray(physics.bind(self._prop.vertices).element_id)
+        self._vertex_heights = (3 * vertex_ids + 2).astype(np.intp)
+        self._site_xpos = self._data.site_xpos.reshape(-1)
 
     def initialize_episode(self, physics, random_state) -> None:
         super().initialize_episode(physics, random_state)
         self._prop_placer(physics, random_state)
 
     def get_reward(self, physics) -> float:
-        height = self._site_xpos[self._vertex_ids, 2].min()
+        height = float(np.minimum.reduce(self._site_xpos.take(self._vertex_heights)))
         if height <= 0.0:
             # The prop lies on the table, where the reward is 0: skip the work (most steps).
             return 0.0

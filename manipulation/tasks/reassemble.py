@@ -81,13 +81,16 @@ class Reassemble(base.ManipulationTask):
         self._seat_errors = SeatErrors(physics, list(zip(tower[:-1], tower[1:])))
 
     def get_reward(self, physics) -> float:
-        seated = rewards.tolerance(
-            self._seat_errors(),
-            bounds=(0.0, tc.SEAT_TOLERANCE),
-            margin=tc.REASSEMBLE_MARGIN,
-            sigmoid="gaussian",
-        )
-        return float(seated.mean())
+        seated = [
+            rewards.tolerance(
+                error,
+                bounds=(0.0, tc.SEAT_TOLERANCE),
+                margin=tc.REASSEMBLE_MARGIN,
+                sigmoid="gaussian",
+            )
+            for error in self._seat_errors()
+        ]
+        return sum(seated) / len(seated)
 
 
 def reassemble_3_bricks_fixed_order(obs_settings: ObservationSettings) -> Reassemble:

@@ -1,6 +1,6 @@
 """How far entities are from their seats on others: a brick on a brick, a brick in a cradle."""
 
-import numpy as np
+import math
 
 from manipulation.props import Duplo2x4
 
@@ -20,18 +20,28 @@ class SeatErrors:
     """
 
     def __init__(self, physics, pairs, seat_height: float = Duplo2x4.HEIGHT):
-        self._lower = np.array([physics.bind(lower.root_body).element_id for lower, _ in pairs])
-        self._upper = np.array([physics.bind(upper.root_body).element_id for _, upper in pairs])
-        # Elements 2, 5 and 8 of a body's row-major rotation matrix are its z axis.
-        self._lower_z = (self._lower[:, None] * 9 + np.array([2, 5, 8])).ravel()
-        self._seat_height = seat_height
         data = physics.data.ptr
-        self._xpos = data.xpos
-        self._xmat = data.xmat.reshape(-1)
+        xpos, xmat = data.xpos, data.xmat
+        self._seat_height = float(seat_height)
+        # Per pair, views of MuJoCo's arrays: the upper body's position, the lower body's,
+        # and the lower body's z axis (elements 2, 5 and 8 of its row-major rotation matrix).
+        self._views = []
+        for lower, upper in pairs:
+            lower_id = physics.bind(lower.root_body).element_id
+            upper_id = physics.bind(upper.root_body).element_id
+            self._views.append((xpos[upper_id], xpos[lower_id], xmat[lower_id, 2::3]))
 
-    def __call__(self) -> np.ndarray:
+    def __call__(self) -> list[float]:
         """The distance (m) of each pair's upper entity from its seat on the lower one."""
-        xpos = self._xpos
-        up = self._xmat.take(self._lower_z).reshape(-1, 3)
-        offset = xpos.take(self._upper, 0) - xpos.take(self._lower, 0) - self._seat_height * up
-        return np.sqrt((offset * offset).sum(1))
+        # A few pairs: plain float arithmetic costs less than NumPy calls.
+        height = self._seat_height
+        distances = []
+        for upper, lower, axis in self._views:
+            ux, uy, uz = upper.tolist()
+            lx, ly, lz = lower.tolist()
+            ax, ay, az = axis.tolist()
+            dx = ux - lx - height * ax
+            dy = uy - ly - height * ay
+            dz = uz - lz - height * az
+            distances.append(math.sqrt(dx * dx + dy * dy + dz * dz))
+        return distances

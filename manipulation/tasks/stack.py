@@ -98,13 +98,13 @@ class Stack(base.ManipulationTask):
         self._seat_errors = SeatErrors(physics, list(zip(tower[:-1], tower[1:])))
 
     def get_reward(self, physics) -> float:
-        seated = rewards.tolerance(
-            self._seat_errors(),
-            bounds=(0.0, tc.SEAT_TOLERANCE),
-            margin=tc.PLACE_MARGIN,
-            sigmoid="gaussian",
-        )
-        reward = float(seated.mean())
+        seated = [
+            rewards.tolerance(
+                error, bounds=(0.0, tc.SEAT_TOLERANCE), margin=tc.PLACE_MARGIN, sigmoid="gaussian"
+            )
+            for error in self._seat_errors()
+        ]
+        reward = sum(seated) / len(seated)
         if self._hand_touches():
             return tc.HELD_FACTOR * reward
         return reward

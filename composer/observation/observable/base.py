@@ -75,6 +75,37 @@ def _check_image_size(owner: Any, option: str, value: Any) -> int:
     raise ValueError(f"{owner!r}: option {option!r} must be an integer >= 1; got {value!r}")
 
 
+def view_source(value) -> tuple[np.ndarray, np.ndarray] | None:
+    """Where a view of memory that NumPy does not own (such as a MuJoCo array's) reads from.
+
+    Returns (flat, indices): `flat` a 1-D view of the whole C-contiguous array that `value`
+    is a view of, and `indices` of `value`'s shape with `flat[indices]` equal to `value`.
+    None for anything else: a copy, a scalar, or a view that does not step through whole
+    elements.
+    """
+    if not isinstance(value, np.ndarray):
+        return None
+    root = value
+    while isinstance(root.base, np.ndarray):
+        root = root.base
+    if root.flags.owndata or root.base is None:
+        return None
+    if not root.flags.c_contiguous or root.dtype != value.dtype:
+        return None
+    itemsize = value.itemsize
+    offset = value.__array_interface__["data"][0] - root.__array_interface__["data"][0]
+    if offset % itemsize or any(stride % itemsize for stride in value.strides):
+        return None
+    # Element offsets in C order, in plain Python: observed values have a few elements.
+    indices = [offset // itemsize]
+    for length, stride in zip(value.shape, value.strides):
+        step = stride // itemsize
+        indices = [index + k * step for index in indices for k in range(length)]
+    if indices and (min(indices) < 0 or max(indices) >= root.size):
+        return None
+    return root.reshape(-1), np.array(indices, dtype=np.intp).reshape(value.shape)
+
+
 def _camera_id(physics, camera) -> int:
     """Returns the id of `camera` (an id, or a name in the compiled model) in `physics`."""
     if isinstance(camera, str):
@@ -190,6 +221,45 @@ class Observable(metaclass=abc.ABCMeta):
 
         return corrupted
 
+    def live_source(self, physics) -> tuple[np.ndarray, np.ndarray] | None:
+        """Where in the physics' memory this observable's value always is, or None.
+
+        Returns (array, indices), `array` 1-D, such that `array[indices]` equals what the
+        observation callable would return at any time, provided the physics has no pending
+        `forward()` (`physics.is_dirty` is False). The updater samples such observables by
+        gathering many at once, instead of calling them; it asks once per physics and keeps
+        the answer for later episodes while the observable's options stay the same. None for
+        an observable with a corruptor, and by default; subclasses whose value is a fixed
+        part of a MuJoCo array implement `_live_source(physics)`, often with
+        `view_source(view)`.
+        """
+        if self._corruptor is not None:
+            return None
+        return self._live_source(physics)
+
+    def _live_source(self, physics) -> tuple[np.ndarray, np.ndarray] | None:
+        """The (array, indices) `live_source` returns without a corruptor, or None."""
+        return None
+
+    def observation_writer(self, physics, out: np.ndarray) -> Callable[[], Any] | None:
+        """A zero-argument function that writes the current value into `out`, or None.
+
+        `out` is an array of the shape and dtype of one sample. Like `live_source`, the
+        function reads the physics' memory directly, is only used while the physics has no
+        pending `forward()`, and is kept for later episodes with the same physics; the
+        updater calls it instead of the observation callable for observables that keep one
+        undelayed sample. None for an observable with a corruptor, and by default;
+        subclasses that compute their value into a preallocated array implement
+        `_writer(physics, out)`.
+        """
+        if self._corruptor is not None:
+            return None
+        return self._writer(physics, out)
+
+    def _writer(self, physics, out: np.ndarray) -> Callable[[], Any] | None:
+        """The function `observation_writer` returns without a corruptor, or None."""
+        return None
+
     def __call__(self, physics, random_state=None):
         """Returns the current (corrupted) value for `physics`."""
         return self.observation_callable(physics, random_state)()
@@ -260,6 +330,11 @@ class MujocoFeature(Observable):
         if callable(feature_name):
             return lambda: indexer[feature_name()]
         return lambda: indexer[feature_name]
+
+    def _live_source(self, physics):
+        if callable(self._feature_name):
+            return None
+        return view_source(getattr(physics.named.data, self._kind)[self._feature_name])
 
     def __repr__(self) -> str:
         return f"<MujocoFeature observable {self._kind}[{self._feature_name!r}]>"

@@ -51,6 +51,14 @@ class MJCFFeature(base.Observable):
         kind, index = self._kind, self._index
         return lambda: getattr(binding, kind)[index]
 
+    def _live_source(self, physics):
+        # A binding serves consecutive rows as a view of MuJoCo's array and gathers others
+        # into a reused buffer on every read; only the former is live.
+        value = getattr(physics.bind(self._mjcf_element), self._kind)
+        if self._index is not None:
+            value = value[self._index]
+        return base.view_source(value)
+
     def __repr__(self) -> str:
         return f"<MJCFFeature observable {self._kind!r} of {self._mjcf_element!r}>"
 
