@@ -142,6 +142,32 @@ def test_task_and_extra_hooks_receive_the_action_and_entity_hooks_do_not():
     np.testing.assert_array_equal(received[1][1], [0.5, -0.5])
 
 
+def test_entity_before_step_hooks_see_the_action_in_the_controls():
+    seen = []
+
+    class Recorder(Box):
+        def before_step(self, physics, random_state):
+            seen.append(physics.data.ctrl.copy())
+
+    task = ReachTask()
+    task.arena.add_free_entity(Recorder(name="recorder"))
+    env = composer.Environment(task)
+    env.reset()
+    env.step([0.5, -0.25])
+    np.testing.assert_array_equal(seen, [[0.5, -0.25]])
+
+
+def test_task_before_step_override_sets_the_controls_instead_of_the_action():
+    class Halving(ReachTask):
+        def before_step(self, physics, action, random_state):
+            physics.set_control(0.5 * np.asarray(action))
+
+    env = composer.Environment(Halving())
+    env.reset()
+    env.step([0.5, -0.25])
+    np.testing.assert_array_equal(env.physics.data.ctrl, [0.25, -0.125])
+
+
 def test_entities_without_overrides_contribute_no_hooks():
     task = ReachTask()
     hooks = EnvironmentHooks(task)

@@ -5,7 +5,7 @@ import collections
 import numpy as np
 import pytest
 
-from composer.observation.obs_buffer import Buffer
+from composer.observation.obs_buffer import Buffer, LatestSampleBuffer
 
 
 def test_read_before_buffer_fills_pads_front_with_zeros():
@@ -134,3 +134,17 @@ def test_read_earlier_than_every_held_sample_is_a_clear_error():
     buffer.insert(6, 1, 2.0)  # arrives at 7; the padding slot is gone
     with pytest.raises(ValueError, match="precedes"):
         buffer.read(4)
+
+
+def test_latest_sample_buffer_holds_its_sample_in_the_storage_it_is_given():
+    block = np.full(8, 7.0)
+    buffer = LatestSampleBuffer((3,), np.float64, storage=block[2:5].reshape(1, 3))
+    np.testing.assert_array_equal(block, [7, 7, 0, 0, 0, 7, 7, 7])
+    buffer.insert(0, 0, np.array([1.0, 2.0, 3.0]))
+    np.testing.assert_array_equal(block[2:5], [1, 2, 3])
+    np.testing.assert_array_equal(buffer.read(0), [[1, 2, 3]])
+
+
+def test_latest_sample_buffer_rejects_storage_of_another_shape():
+    with pytest.raises(ValueError, match=r"storage must be .* shape \(1, 3\)"):
+        LatestSampleBuffer((3,), np.float64, storage=np.zeros(3))

@@ -1,0 +1,213 @@
+"""Direct sampling: observables whose values live in MuJoCo arrays are gathered, not called.
+
+Every test compares against the same observables with an identity corruptor, which rules
+direct sampling out, so the observations must be identical.
+"""
+
+import collections
+
+import numpy as np
+import pytest
+
+import mjcf
+from composer.observation import observable, updater
+from composer.observation.observable import base
+
+_SUB_STEPS = 5
+
+
+class _Scene:
+    """A hinge-and-slide arm with a tip site and sensor, and a free ball, under gravity."""
+
+    def __init__(self):
+        self.model = mjcf.RootElement(model="scene")
+        self.model.option.timestep = 0.005
+        self.model.worldbody.add("geom", type="plane", size=[3, 3, 0.1])
+        arm = self.model.worldbody.add("body", name="arm", pos=[0, 0, 0.5])
+        self.hinge = arm.add("joint", name="hinge", type="hinge", axis=[0, 1, 0], damping=0.1)
+        self.slide = arm.add("joint", name="slide", type="slide", axis=[1, 0, 0], damping=1)
+        arm.add("geom", type="capsule", fromto=[0, 0, 0, 0.3, 0, 0], size=[0.03])
+        self.tip = arm.add("site", name="tip", pos=[0.3, 0, 0])
+        self.ball = self.model.worldbody.add("body", name="ball", pos=[0.5, 0.5, 0.3])
+        self.ball.add("freejoint")
+        self.ball.add("geom", type="sphere", size=[0.05])
+        self.sensor = self.model.sensor.add("framepos", objtype="site", objname=self.tip)
+        self.model.actuator.add("motor", joint=self.hinge)
+        self.physics = mjcf.Physics.from_mjcf_model(self.model)
+
+
+def _observables(scene, corrupted=False):
+    """Observables of every kind that can be sampled directly, and some that cannot."""
+    options = {"corruptor": lambda value, random_state: value} if corrupted else {}
+    joints = [scene.hinge, scene.slide]
+    observables = collections.OrderedDict(
+        joints_qpos=observable.MJCFFeature("qpos", joints, **options),
+        # Rows out of order: the binding gathers them into a buffer, which is not live.
+        reversed_qpos=observable.MJCFFeature("qpos", joints[::-1], **options),
+        joints_qvel_every_3=observable.MJCFFeature("qvel", joints, update_interval=3, **options),
+        tip=observable.MJCFFeature("xpos", scene.tip, **options),
+        tip_xy=observable.MJCFFeature("xpos", scene.tip, index=slice(0, 2), **options),
+        tip_z=observable.MJCFFeature("xpos", scene.tip, index=2, **options),
+        ball_rotation=observable.MJCFFeature("xmat", scene.ball, **options),
+        ball_velocity=observable.MJCFFeature("cvel", scene.ball, **options),
+        sensor=observable.MJCFFeature("sensordata", scene.sensor, **options),
+        named_tip=observable.MujocoFeature("site_xpos", "tip", **options),
+        tip_history=observable.MJCFFeature("xpos", scene.tip, buffer_size=2, **options),
+    )
+    for obs in observables.values():
+        obs.enabled = True
+    return observables
+
+
+def _updater(observables, strip=False):
+    return updater.Updater(observables, _SUB_STEPS, strip_singleton_buffer_dim=strip)
+
+
+def _run(scene, updaters, control_steps, between_steps=None):
+    """Steps the scene under random torques; returns each updater's observations."""
+    physics = scene.physics
+    random_state = np.random.RandomState(0)
+    for each in updaters:
+        each.reset(physics, np.random.RandomState(1))
+    observations = [[each.get_observation()] for each in updaters]
+    for _ in range(control_steps):
+        physics.set_control(random_state.uniform(-1, 1, size=1))
+        for each in updaters:
+            each.prepare_for_next_control_step()
+        for _ in range(_SUB_STEPS):
+            physics.step()
+            if between_steps is not None:
+                between_steps(physics)
+            for each in updaters:
+                each.update()
+        for each, seen in zip(updaters, observations):
+            seen.append(each.get_observation())
+    return observations
+
+
+def _assert_same_observations(first, second):
+    assert len(first) == len(second)
+    for one, other in zip(first, second):
+        assert list(one) == list(other)
+        for name in one:
+            assert one[name].dtype == other[name].dtype, name
+            np.testing.assert_array_equal(one[name], other[name], err_msg=name)
+
+
+@pytest.mark.parametrize("strip", [False, True])
+def test_directly_sampled_observations_equal_those_of_the_observables_callables(strip):
+    scene = _Scene()
+    direct = _updater(_observables(scene), strip)
+    called = _updater(_observables(scene, corrupted=True), strip)
+    direct_seen, called_seen = _run(scene, [direct, called], control_steps=8)
+    _assert_same_observations(direct_seen, called_seen)
+
+
+def test_mjcf_and_mujoco_features_that_read_views_have_live_sources():
+    scene = _Scene()
+    observables = _observables(scene)
+    live = [name for name, obs in observables.items() if obs.live_source(scene.physics)]
+    assert set(live) == {
+        "joints_qpos",
+        "joints_qvel_every_3",
+        "tip",
+        "tip_xy",
+        "ball_rotation",
+        "ball_velocity",
+        "sensor",
+        "named_tip",
+        "tip_history",
+    }
+
+
+def test_live_source_holds_the_observed_value():
+    scene = _Scene()
+    scene.physics.step(3)
+    for name, obs in _observables(scene).items():
+        source = obs.live_source(scene.physics)
+        if source is not None:
+            array, indices = source
+            np.testing.assert_array_equal(array[indices], obs(scene.physics), err_msg=name)
+
+
+def test_corruptor_rules_out_a_live_source():
+    scene = _Scene()
+    obs = observable.MJCFFeature("xpos", scene.tip, corruptor=lambda v, random_state: v)
+    assert obs.live_source(scene.physics) is None
+
+
+def test_observations_after_a_binding_write_show_the_state_written():
+    # A write through a binding leaves derived quantities stale until the next forward();
+    # sampling must run it, as reading through the binding does.
+    scene = _Scene()
+    direct = _updater(_observables(scene))
+
+    def move_the_arm(physics):
+        physics.bind(scene.hinge).qpos = physics.bind(scene.hinge).qpos + 0.01
+
+    (direct_seen,) = _run(scene, [direct], control_steps=2, between_steps=move_the_arm)
+    scene.physics.forward()
+    np.testing.assert_array_equal(direct_seen[-1]["tip"][0], scene.physics.bind(scene.tip).xpos)
+    np.testing.assert_array_equal(direct_seen[-1]["sensor"][0], scene.physics.bind(scene.tip).xpos)
+
+
+def test_options_changed_between_episodes_take_effect():
+    scene = _Scene()
+    observables = _observables(scene)
+    direct = _updater(observables)
+    direct.reset(scene.physics, np.random.RandomState(1))
+    observables["tip"].corruptor = lambda value, random_state: value + 1.0
+    observables["joints_qpos"].buffer_size = 3
+    direct.reset(scene.physics, np.random.RandomState(1))
+    observation = direct.get_observation()
+    np.testing.assert_array_equal(observation["tip"][0], scene.physics.bind(scene.tip).xpos + 1)
+    assert observation["joints_qpos"].shape == (3, 2)
+
+
+def test_later_episodes_observe_as_the_first_does():
+    scene = _Scene()
+    direct = _updater(_observables(scene))
+    called = _updater(_observables(scene, corrupted=True))
+    first = _run(scene, [direct, called], control_steps=3)
+    second = _run(scene, [direct, called], control_steps=3)
+    _assert_same_observations(*first)
+    _assert_same_observations(*second)
+
+
+def test_physics_reloaded_between_episodes_is_the_one_observed():
+    scene = _Scene()
+    direct = _updater(_observables(scene))
+    direct.reset(scene.physics, np.random.RandomState(1))
+    scene.physics.reload_from_mjcf_model(scene.model)
+    direct.reset(scene.physics, np.random.RandomState(1))
+    direct.prepare_for_next_control_step()
+    for _ in range(_SUB_STEPS):
+        scene.physics.step()
+        direct.update()
+    ball_velocity = scene.physics.bind(scene.ball).cvel
+    assert np.any(ball_velocity != 0)
+    np.testing.assert_array_equal(direct.get_observation()["ball_velocity"][0], ball_velocity)
+
+
+def test_view_source_locates_a_strided_view_of_a_mujoco_array():
+    physics = _Scene().physics
+    physics.step(2)
+    xmat = physics.data.ptr.xmat
+    z_axes = xmat[:, 2::3]
+    flat, indices = base.view_source(z_axes)
+    assert flat.shape == (xmat.size,)
+    np.testing.assert_array_equal(flat[indices], z_axes)
+
+
+@pytest.mark.parametrize(
+    "value",
+    [np.zeros(3), np.zeros((2, 3))[:, 1], 1.5, [1.0, 2.0]],
+    ids=["numpy_owned", "view_of_numpy_owned", "float", "list"],
+)
+def test_view_source_is_none_for_memory_numpy_owns_and_for_non_arrays(value):
+    assert base.view_source(value) is None
+
+
+def test_view_source_of_a_copy_is_none():
+    physics = _Scene().physics
+    assert base.view_source(physics.data.ptr.xpos[1].copy()) is None
