@@ -1,8 +1,5 @@
 """JacoArm: the six-joint Jaco-style arm as a composer robot."""
 
-import math
-import struct
-
 import numpy as np
 
 import composer
@@ -69,16 +66,6 @@ class JacoArm(composer.Robot):
         return self._wrist_site
 
 
-class _Gathered:
-    """`array[indices]` read afresh by every `tolist()`."""
-
-    def __init__(self, array: np.ndarray, indices: np.ndarray):
-        self._array, self._indices = array, indices
-
-    def tolist(self) -> list:
-        return self._array.take(self._indices).tolist()
-
-
 def _consecutive_view(array: np.ndarray, indices: np.ndarray):
     """`array[indices]` as a view when the indices are consecutive, else None."""
     first = int(indices[0])
@@ -99,20 +86,20 @@ class _JointAngleSinCos(observable.Observable):
     def _writer(self, physics, out):
         qpos = physics.data.ptr.qpos
         addresses = np.array(physics.bind(self._joints).qposadr)
+        sines, cosines = out[:, 0], out[:, 1]
         angles = _consecutive_view(qpos, addresses)
         if angles is None:
-            angles = _Gathered(qpos, addresses)
-        # A few angles: Python's math module and one struct write into `out` cost less than
-        # NumPy's ufunc machinery (math.sin and np.sin are both the C library's sin).
-        pack = struct.Struct(f"{2 * len(addresses)}d").pack_into
-        target = memoryview(out)
-        sin, cos = math.sin, math.cos
 
-        def write():
-            values = []
-            for angle in angles.tolist():
-                values += (sin(angle), cos(angle))
-            pack(target, 0, *values)
+            def write():
+                gathered = qpos.take(addresses)
+                np.sin(gathered, sines)
+                np.cos(gathered, cosines)
+
+        else:
+
+            def write():
+                np.sin(angles, sines)
+                np.cos(angles, cosines)
 
         return write
 
