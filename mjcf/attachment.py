@@ -31,8 +31,7 @@ class AttachmentFrame(Element):
         children = self._spec.children
         return {tag: children[tag] for tag in _FRAME_CHILDREN if tag in children}
 
-    def prefixed_identifier(self, prefix_root=None) -> str:
-        prefix = self._root._namescope.full_prefix(prefix_root)
+    def _scoped_name(self, prefix: str) -> str:
         return prefix + self._attached._namescope.name + constants.PREFIX_SEPARATOR
 
     def unnamed_joint(self) -> Element | None:

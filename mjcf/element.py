@@ -144,11 +144,13 @@ class Element:
 
     def prefixed_identifier(self, prefix_root=None) -> str | None:
         """This element's identifier as seen from model `prefix_root` (None: its own model)."""
-        spec = self._spec
-        if spec.identifier is None:
+        if self._spec.identifier is None:
             return None
-        prefix = self._root._namescope.full_prefix(prefix_root)
-        if spec.identifier == "class":
+        return self._scoped_name(self._root._namescope.full_prefix(prefix_root))
+
+    def _scoped_name(self, prefix: str) -> str:
+        """This element's identifier when its model's scope prefix is `prefix`."""
+        if self._spec.identifier == "class":
             if self._parent is self._root:
                 return prefix or _SEP
             return prefix + self._attributes["class"]

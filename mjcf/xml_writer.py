@@ -185,7 +185,7 @@ class _Writer:
                 f"of model {target._root._namescope.name!r}, which is not part of the model "
                 "being written"
             )
-        return _escape(_scoped_identifier(target, prefix))
+        return _escape(target._scoped_name(prefix))
 
     # ---------------------------------------------------------------------- elements
 
@@ -518,20 +518,6 @@ def _models_below(root: RootElement) -> list[RootElement]:
     return models
 
 
-def _scoped_identifier(target: Element, prefix: str) -> str:
-    spec = target._spec
-    if type(target) is AttachmentFrame:
-        return prefix + target._attached._namescope.name + _SEP
-    if spec.identifier == "class":
-        if target._parent is target._root:
-            return prefix or _SEP
-        return prefix + target._attributes["class"]
-    name = target._attributes.get("name")
-    if name is not None:
-        return prefix + name
-    return target._generated_name(prefix)
-
-
 def element_to_string(
     element: Element, prefix_root, self_close, pretty_print, precision, zero_threshold
 ) -> str:
@@ -604,7 +590,7 @@ def attribute_string(element: Element, spec, prefix_root) -> str | None:
     if kind == _STRING:
         return value
     if kind == _IDENTIFIER:
-        return _scoped_identifier(element, writer.prefix_of(element._root))
+        return element._scoped_name(writer.prefix_of(element._root))
     if kind == _REFERENCE:
         return writer.resolve(element, spec.name, value, value_type)
     if kind == _FILE:
