@@ -2,10 +2,12 @@
 
 The text is assembled directly from string pieces. Each element caches the formatted text of
 its plain attributes (per precision setting); identifiers, references and file names are
-scoped at write time because they depend on where the model is attached. A whole-model write
-also caches each element's opening tag, valid while the written model's naming stamp (see
-`NameScope`), the element's scope prefix and its inherited default class stay the same, and
-the whole text, valid while the model's modification count also stays the same.
+scoped at write time because they depend on where the model is attached. A model's first
+whole-model write caches nothing on its elements (most models are written once) and gathers
+the file assets on the way, for `get_assets`. Later whole-model writes cache each element's
+opening tag, valid while the written model's naming stamp (see `NameScope`), the element's
+scope prefix and its inherited default class stay the same. The whole text is kept, valid
+while the model's modification count also stays the same.
 
 A whole model is written so that every compiled object is addressable: unnamed elements that
 compile to a named object get a generated name, and every element that accepts a default
@@ -29,6 +31,7 @@ _REFERENCE = attribute_types.REFERENCE
 _FILE = attribute_types.FILE
 _FULL_PRECISION = (17, 0)
 _DEFAULT = constants.DEFAULT
+_JOINT = constants.JOINT
 _MAIN = "main"
 _TOP_ONLY_SECTIONS = ("statistic",)
 # Element._xml_cache is (precision key, plain attribute text, stamp, scope prefix, inherited
@@ -71,6 +74,9 @@ class _Writer:
         "empty_close",
         "open_end",
         "shallow",
+        "visit",
+        "caching",
+        "assets",
     )
 
     def __init__(self, prefix_root, self_close, pretty, precision, zero_threshold, full):
@@ -85,7 +91,8 @@ class _Writer:
         self.prefix_root = prefix_root
         self.prefixes: dict[int, str] = {}
         self.sections: dict[int, dict[str, Element]] = {}
-        # (model, namespace, name) -> XML text of a name found in that model's own scope.
+        # (model, attribute type, name) -> XML text of a name found in that model's own
+        # scope (the type stands for the namespace it refers to).
         self.resolved: dict[tuple, str] = {}
         self.class_texts: dict[str, str] = {}
         # Element heads of a whole-model write are cached under this stamp with their scope
@@ -98,6 +105,13 @@ class _Writer:
         self.open_end = ">\n" if pretty else ">"
         # Writes only the element's own tag, with '...' standing for its children.
         self.shallow = False
+        # Writes one element: `element`, or `fresh_element` on a model's first write.
+        self.visit = self.element
+        # Whether built opening tags are cached on the elements (whole-model writes after
+        # the first; see `model`).
+        self.caching = False
+        # VFS filename -> contents of the file assets met by `fresh_element`, or None.
+        self.assets: dict[str, bytes] | None = None
 
     def indent(self, depth: int) -> str:
         return "  " * depth if self.pretty else ""
@@ -148,7 +162,7 @@ class _Writer:
                 namespace = value_type.target_namespace(element._attributes)
                 if namespace is None:
                     return _escape(self.prefix_of(root) + value)
-            key = (root, namespace, value)
+            key = (root, value_type, value)
             text = self.resolved.get(key)
             if text is not None:
                 return text
@@ -192,13 +206,13 @@ class _Writer:
     def element(self, element: Element, depth: int, prefix: str, dclass: str | None) -> None:
         """Writes `element` of the model with scope `prefix`; `dclass`: inherited class.
 
-        This runs once per element of the model, so the opening tag ("head") is built here
-        rather than in a helper: on a model's first write that saves a call per element.
+        Reuses what an earlier whole-model write kept on the element under the same stamp,
+        scope prefix and class: its whole text, or its opening tag ("head"); anything else
+        is built by `fresh_element`.
         """
         if type(element) is AttachmentFrame:
             self.kept(element, depth, prefix, dclass, self.frame, element, depth, dclass)
             return
-        out = self.out
         stamp = self.stamp
         if stamp is not None:
             text = element._text_cache
@@ -209,86 +223,123 @@ class _Writer:
                 and text[2] == dclass
                 and text[3] == depth
             ):
-                out.append(text[4])
+                self.out.append(text[4])
                 return
+            cache = element._xml_cache
+            if (
+                cache is not None
+                and cache[2] == stamp
+                and cache[3] == prefix
+                and cache[4] == dclass
+            ):
+                # Written before under the same names: likely to be written again, so its
+                # whole text is kept (not on a first write, which would pay for joining it).
+                self.tree(element, cache[5], depth, prefix, cache[6], True, dclass)
+                return
+        self.fresh_element(element, depth, prefix, dclass)
+
+    def fresh_element(self, element: Element, depth: int, prefix: str, dclass: str | None):
+        """Writes `element` (see `element`), building its opening tag.
+
+        On a model's first write (`self.caching` False) nothing is cached on the element and
+        the file assets met are gathered into `self.assets`, so that a first compile walks
+        the model once. This runs once per element of a new model: keep it lean.
+        """
+        if type(element) is AttachmentFrame:
+            self.kept(element, depth, prefix, dclass, self.frame, element, depth, dclass)
+            return
+        spec = element._spec
+        tag = spec.name
+        attributes = element._attributes
+        plain = element._texts
         cache = element._xml_cache
-        inherited = dclass
-        if (
-            stamp is not None
-            and cache is not None
-            and cache[2] == stamp
-            and cache[3] == prefix
-            and cache[4] == dclass
-        ):
-            head = cache[5]
-            dclass = cache[6]
-            # Written before under the same names: likely to be written again, so its whole
-            # text is kept below (not on a first write, which would pay for joining it).
-            keep_text = True
+        if cache is not None and cache[0] == self.key:
+            static = cache[1]
+        elif self.full_precision:
+            static = "".join(plain.values())
         else:
-            keep_text = False
-            spec = element._spec
-            attributes = element._attributes
-            plain = element._texts
-            if cache is not None and cache[0] == self.key:
-                static = cache[1]
-            elif self.full_precision:
-                static = "".join(plain.values())
+            static = self.static_text(element)
+        # Attributes that are neither plain nor the name: references and files.
+        scoped = len(attributes) - len(plain)
+        if spec.identifier == "name":
+            identifier = attributes.get("name")
+            if identifier is not None:
+                scoped -= 1
+                head = f'<{tag} name="{_escape(prefix + identifier)}"{static}'
+            elif not self.full:
+                head = f"<{tag}{static}"
+            elif spec.namespace == _JOINT:
+                # An attachment frame's first unnamed joint is named after the frame.
+                head = f'<{tag} name="{element._generated_name(prefix)}"{static}'
             else:
-                static = self.static_text(element)
-            # Attributes that are neither plain nor the name: references and files.
-            scoped = len(attributes) - len(plain)
-            if spec.identifier == "name":
-                identifier = attributes.get("name")
-                if identifier is not None:
-                    scoped -= 1
-                    head = f'<{spec.name} name="{_escape(prefix + identifier)}"{static}'
-                elif self.full:
-                    generated = element._generated_name(prefix)
-                    head = f'<{spec.name} name="{generated}"{static}'
-                else:
-                    head = f"<{spec.name}{static}"
-            else:
-                head = f"<{spec.name}{static}"
-            has_class = False
-            if scoped:
-                specs = spec.attributes
-                for name, value in attributes.items():
-                    if name in plain:
-                        continue
-                    value_type = specs[name].type
-                    kind = value_type.kind
-                    if kind == _REFERENCE:
-                        if name == "class":
-                            has_class = True
-                        head += f' {name}="{self.resolve(element, name, value, value_type)}"'
-                    elif kind == _FILE:
-                        if isinstance(value, Asset):
-                            value = _file_asset(element, value, self.prefix_of(element._root))
-                            value = value.get_vfs_filename()
-                        head += f' {name}="{_escape(value)}"'
-            if dclass is not None and not has_class and spec.takes_class:
-                head += self.class_text(dclass)
-            if spec.name == "body":
-                childclass = attributes.get("childclass")
-                if childclass is not None:
-                    childclass_type = spec.attributes["childclass"].type
-                    dclass = self.resolve(element, "childclass", childclass, childclass_type)
-            if stamp is not None:
-                _set_xml_cache(element, (self.key, static, stamp, prefix, inherited, head, dclass))
-            elif cache is None or cache[0] != self.key:
-                _set_xml_cache(element, (self.key, static, None, None, None, None, None))
+                auto_id = element._auto_id or element._unnamed_id()
+                head = f'<{tag} name="{prefix or _SEP}{auto_id}"{static}'
+        else:
+            head = f"<{tag}{static}"
+        has_class = False
+        if scoped:
+            specs = spec.attributes
+            resolved = self.resolved
+            for name, value in attributes.items():
+                if name in plain:
+                    continue
+                value_type = specs[name].type
+                kind = value_type.kind
+                if kind == _REFERENCE:
+                    if name == "class":
+                        has_class = True
+                    text = None
+                    if type(value) is str:
+                        text = resolved.get((element._root, value_type, value))
+                    if text is None:
+                        text = self.resolve(element, name, value, value_type)
+                    head += f' {name}="{text}"'
+                elif kind == _FILE:
+                    if isinstance(value, Asset):
+                        value = _file_asset(element, value, self.prefix_of(element._root))
+                        filename = value.get_vfs_filename()
+                        if self.assets is not None:
+                            self.assets[filename] = value.contents
+                        value = filename
+                    head += f' {name}="{_escape(value)}"'
+        if dclass is not None and not has_class and spec.takes_class:
+            text = self.class_texts.get(dclass)
+            head += text if text is not None else self.class_text(dclass)
+        inherited = dclass
+        if tag == "body":
+            childclass = attributes.get("childclass")
+            if childclass is not None:
+                childclass_type = spec.attributes["childclass"].type
+                dclass = self.resolve(element, "childclass", childclass, childclass_type)
+        if self.caching:
+            _set_xml_cache(element, (self.key, static, self.stamp, prefix, inherited, head, dclass))
+        if element._children:
+            self.tree(element, head, depth, prefix, dclass, False, inherited)
+            return
+        out = self.out
+        if self.pretty:
+            out.append("  " * depth)
+        out.append(head)
+        out.append(self.empty_close or self.close(tag))
+
+    def tree(self, element, head: str, depth: int, prefix: str, dclass, keep, inherited) -> None:
+        """Writes `element` with opening tag `head` and its children, which inherit class
+        `dclass`. With `keep`, the whole text is kept on the element, filed under the class
+        `inherited` that `element` itself inherits."""
+        out = self.out
         start = len(out)
         if self.pretty:
             out.append("  " * depth)
         out.append(head)
+        tag = element._spec.name
         children = element._children
         if children:
             if self.shallow:
-                out.append(f">...</{element._spec.name}>")
+                out.append(f">...</{tag}>")
                 return
             mark = len(out)
             out.append(self.open_end)
+            visit = self.visit
             for child in children:
                 # Inlined _worth_writing: this loop visits every element of the model.
                 if (
@@ -297,17 +348,16 @@ class _Writer:
                     or child._spec.repeated
                     or child._spec.namespace is not None
                 ):
-                    self.element(child, depth + 1, prefix, dclass)
+                    visit(child, depth + 1, prefix, dclass)
             if len(out) > mark + 1:
-                tag = element._spec.name
                 out.append(f"{'  ' * depth}</{tag}>\n" if self.pretty else f"</{tag}>")
-                if keep_text:
+                if keep:
                     text = "".join(out[start:])
                     out[start:] = [text]
                     _set_text_cache(element, (self.text_stamp, prefix, inherited, depth, text))
                 return
             del out[mark:]
-        out.append(self.empty_close or self.close(element._spec.name))
+        out.append(self.empty_close or self.close(tag))
 
     def kept(self, owner: Element, depth: int, prefix: str, dclass, write, *args) -> None:
         """Writes `owner`'s part of the document by calling `write(*args)`.
@@ -331,6 +381,8 @@ class _Writer:
         if seen and cache[4] is not None:
             if cache[4]:
                 out.append(cache[4])
+                # Files in the reused text were not met: leave the assets to get_assets.
+                self.assets = None
             return
         start = len(out)
         write(*args)
@@ -344,7 +396,7 @@ class _Writer:
         """Writes the children of `parent` that change the compiled model."""
         for child in parent._children:
             if _worth_writing(child):
-                self.element(child, depth, prefix, dclass)
+                self.visit(child, depth, prefix, dclass)
 
     def class_text(self, dclass: str) -> str:
         """' class="..."' for an inherited default class (a few distinct ones per model)."""
@@ -365,7 +417,7 @@ class _Writer:
         out.append(f'{self.indent(depth)}<body name="{_escape(child_prefix)}"{static}>')
         out.append(self.newline())
         for child in frame._children:
-            self.element(child, depth + 1, own_prefix, dclass)
+            self.visit(child, depth + 1, own_prefix, dclass)
         world = model._singleton_if_present(constants.WORLDBODY)
         if world is not None:
             child_class = (child_prefix or _SEP) if self.full else None
@@ -384,7 +436,7 @@ class _Writer:
                 child_name = prefix + child._attributes.get("class", "")
                 self.default_class(child, depth + 1, prefix, child_name)
             elif child._children or child._attributes:
-                self.element(child, depth + 1, prefix, None)
+                self.visit(child, depth + 1, prefix, None)
         out.append(f"{self.indent(depth)}</default>{self.newline()}")
 
     # ------------------------------------------------------------------------- models
@@ -394,6 +446,12 @@ class _Writer:
         # changes all renew `root`'s naming stamp; the scope prefix covers where `root` is.
         self.stamp = (self.key, id(root), root._namescope.naming_stamp)
         self.text_stamp = (self.stamp, self.pretty, self.self_close)
+        self.caching = root._xml_string_cache is not None
+        if not self.caching:
+            self.visit = self.fresh_element
+            if self.prefix_root is root:
+                # Gathered as get_assets would: skins scoped by prefixes relative to `root`.
+                self.assets = {}
         models = _models_below(root)
         for model in models:
             self.prefixes[id(model)] = model._namescope.full_prefix(self.prefix_root)
@@ -412,7 +470,7 @@ class _Writer:
             elif tag in _TOP_ONLY_SECTIONS:
                 section = root._singleton_if_present(tag)
                 if section is not None and (section._children or section._attributes):
-                    self.element(section, 1, self.prefixes[id(root)], None)
+                    self.visit(section, 1, self.prefixes[id(root)], None)
             elif tag == constants.WORLDBODY:
                 self.section(tag, [root], 1)
             else:
@@ -544,6 +602,8 @@ def element_to_string(
         text = "".join(writer.out)
         text = text[:-1] if pretty_print and text.endswith("\n") else text
         element._xml_string_cache = (key, text)
+        if writer.assets is not None:
+            element._assets_cache = (element._files_count, writer.assets)
         return text
     else:
         writer = _Writer(prefix_root, self_close, pretty_print, precision, zero_threshold, False)

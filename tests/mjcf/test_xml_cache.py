@@ -2,6 +2,7 @@
 
 import copy
 
+import mujoco
 import pytest
 
 import mjcf
@@ -97,7 +98,7 @@ def test_cached_write_equals_the_write_of_a_fresh_copy_after_many_changes(scene)
     arm = _arm("arm")
     frame = scene.find("site", "left").attach(arm)
     scene.to_xml_string()
-    frame.add("freejoint")
+    frame.add("joint", type="hinge")
     arm.find("geom", "//unnamed_geom_0").rgba = [1, 0, 0, 1]
     arm.model = "limb"
     scene.to_xml_string(precision=4)
@@ -128,3 +129,57 @@ def test_assets_of_a_detached_model_are_gone(scene):
     assert b"solid arm" in scene.get_assets().values()
     arm.detach()
     assert scene.get_assets() == {}
+
+
+def _rich_scene():
+    """Attached models with files, a skin, classes, a frame joint and cross-model references."""
+    from mjcf_test_files import checker_png, tetrahedron_stl, triangle_skin
+
+    scene = mjcf.RootElement(model="rich")
+    scene.default.add("default", dclass="soft").geom.rgba = [0, 1, 0, 1]
+    scene.worldbody.add("body", name="base", childclass="soft").add("geom", size=[0.1])
+    creature = mjcf.RootElement(model="creature")
+    creature.asset.add("mesh", name="shell", file=mjcf.Asset(tetrahedron_stl(), ".stl"))
+    creature.asset.add("texture", name="grid", type="2d", file=mjcf.Asset(checker_png(), ".png"))
+    creature.asset.add("material", name="hide", texture="grid")
+    torso = creature.worldbody.add("body", name="torso")
+    torso.add("geom", type="mesh", mesh="shell", material="hide")
+    torso.add("joint", name="hinge")
+    creature.deformable.add("skin", file=mjcf.Asset(triangle_skin("torso"), ".skn"))
+    creature.sensor.add("framepos", objtype="body", objname="torso")
+    frame = scene.find("body", "base").attach(creature)
+    frame.add("joint", type="hinge")
+    frame.add("inertial", pos=[0, 0, 0], mass=1, diaginertia=[0.1, 0.1, 0.1])
+    scene.attach(_arm("arm"))
+    scene.actuator.add("motor", joint="creature/hinge")
+    return scene
+
+
+def test_first_write_equals_later_writes_that_rebuild_from_cached_pieces():
+    scene = _rich_scene()
+    first = scene.to_xml_string()
+    site = scene.find("site", "arm/tip")
+    for _ in range(2):
+        site.pos = [0, 0, 1]
+        site.pos = None
+        assert scene.to_xml_string() == first
+    assert copy.deepcopy(scene).to_xml_string() == first
+
+
+def test_assets_after_a_first_write_equal_those_of_an_unwritten_copy():
+    scene = _rich_scene()
+    unwritten = copy.deepcopy(scene)
+    xml = scene.to_xml_string()
+    assets = scene.get_assets()
+    assert assets == unwritten.get_assets()
+    assert len(assets) == 3
+    model = mujoco.MjModel.from_xml_string(xml, assets)
+    assert model.skin_bonebodyid[0] == model.body("creature/torso").id
+
+
+def test_assets_of_a_model_written_under_another_prefix_root_stay_scoped_to_itself():
+    scene = _rich_scene()
+    creature = scene.find("body", "creature/torso").root
+    creature.to_xml_string(prefix_root=scene)
+    model = mujoco.MjModel.from_xml_string(creature.to_xml_string(), creature.get_assets())
+    assert model.skin_bonebodyid[0] == model.body("torso").id
