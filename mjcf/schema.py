@@ -2,7 +2,8 @@
 
 Each element is described by an `ElementSpec`: its tag, whether it may repeat, its children
 and its attributes (names from MuJoCo, types from `mjcf.attribute_table`). The world body is
-MuJoCo's body element without attributes; bodies and default classes nest recursively.
+MuJoCo's body element without attributes; bodies, frames and default classes nest
+recursively. `<frame>`, which MuJoCo reads but does not list, is the one element added here.
 """
 
 from __future__ import annotations
@@ -18,6 +19,10 @@ _NAMESPACE_FROM_PARENT = ("actuator", "sensor", "equality", "tendon")
 # Tags whose namespace is not their own tag.
 _NAMESPACE_OF_TAG = {"freejoint": "joint", "key": "key", "instance": "plugin", "flexcomp": "flex"}
 _SCHEMA_COLUMN = 30
+# MuJoCo reads <frame> (a pose and default class for a group of a body's children) but
+# mj_printSchema does not list it. It holds what a body holds; of the body's attributes, it
+# takes these.
+_FRAME_ATTRIBUTES = ("name", "childclass", "pos", "quat", "axisangle", "xyaxes", "zaxis", "euler")
 # Children MuJoCo lists as repeatable that a body can meaningfully hold only once.
 _SINGLE_CHILDREN = ("freejoint",)
 
@@ -49,6 +54,8 @@ class ElementSpec:
       identifier: the attribute that names this element uniquely in its namespace, or None.
       path: tags from the root, for error messages.
       takes_class: whether the element has a `class` attribute (takes a default class).
+      sets_childclass: whether the element has a `childclass` attribute (sets the default
+        class of the elements inside it: bodies and frames).
       holds_files: whether the element, or an element that may be nested in it, has file
         attributes (so searches for file assets can skip the rest).
     """
@@ -63,6 +70,7 @@ class ElementSpec:
         "path",
         "python_attributes",
         "takes_class",
+        "sets_childclass",
         "holds_files",
     )
 
@@ -76,6 +84,7 @@ class ElementSpec:
         self.path = path
         self.python_attributes: dict[str, AttributeSpec] = {}
         self.takes_class = False
+        self.sets_childclass = False
         self.holds_files = False
 
     @property
@@ -90,6 +99,8 @@ class ElementSpec:
             if name == "class":
                 self.python_attributes[name] = spec
                 self.takes_class = True
+            elif name == "childclass":
+                self.sets_childclass = True
 
     def __repr__(self) -> str:
         return f"ElementSpec({self.path!r})"
@@ -136,6 +147,8 @@ def root_spec() -> ElementSpec:
             body = _make_spec("body", world, True, names)
             world.children = body.children
             body.children["body"] = body
+            frame_attributes = [name for name in _FRAME_ATTRIBUTES if name in body.attributes]
+            _make_spec("frame", body, True, frame_attributes).children = body.children
             stack.append(body)
             continue
         # Sections directly under <mujoco> are single containers in the object model.
@@ -194,6 +207,7 @@ def _nested_copy(spec: ElementSpec) -> ElementSpec:
     nested.namespace = spec.namespace
     nested.identifier = spec.identifier
     nested.takes_class = spec.takes_class
+    nested.sets_childclass = spec.sets_childclass
     return nested
 
 

@@ -75,7 +75,7 @@ def _commit(element: Element, inherited, attributes) -> None:
     tag = spec.name
     if tag == constants.DEFAULT:
         return
-    if tag == "body":
+    if spec.sets_childclass:
         inherited = element._attributes.get("childclass", inherited)
     if "class" in spec.attributes and registry_namespace(spec) != constants.DEFAULT:
         dclass = element._attributes.get("class", inherited)

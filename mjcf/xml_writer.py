@@ -306,7 +306,7 @@ class _Writer:
             text = self.class_texts.get(dclass)
             head += text if text is not None else self.class_text(dclass)
         inherited = dclass
-        if tag == "body":
+        if spec.sets_childclass:
             childclass = attributes.get("childclass")
             if childclass is not None:
                 childclass_type = spec.attributes["childclass"].type
