@@ -432,10 +432,16 @@ def _object_id(layout: ModelLayout, family: Family, root, element) -> int:
         return 0
     name = element.full_identifier
     if root is not None and not _belongs(root, element, family.namespace, name):
+        hint = ""
+        if _model_name(element.root) == _model_name(root):
+            hint = (
+                "; they are different objects of the same name (a copy made by pickling or "
+                "copy.deepcopy binds its own elements, not the original's)"
+            )
         raise ValueError(
             f"cannot bind {describe(element)}: it belongs to another model "
             f"({_model_name(element.root)}), not to the model compiled into this Physics "
-            f"({_model_name(root)})"
+            f"({_model_name(root)}){hint}"
         )
     object_id = layout.object_id(family, name)
     if object_id < 0:

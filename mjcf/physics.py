@@ -393,6 +393,19 @@ class Physics:
         new.legacy_step = self.legacy_step
         return new
 
+    def __getstate__(self) -> dict:
+        """What pickling (and ``copy.deepcopy``) keeps: the model and data, with the MJCF
+        model compiled into them; bindings and renderers are rebuilt on use."""
+        return {
+            "data": self._sim.data,
+            "mjcf_model": self._mjcf_model,
+            "legacy_step": self.legacy_step,
+        }
+
+    def __setstate__(self, state: dict) -> None:
+        self._load(state["data"], state["mjcf_model"])
+        self.legacy_step = state["legacy_step"]
+
     def free(self) -> None:
         """Releases renderers and MuJoCo structures; the Physics is unusable afterwards."""
         self._close_renderers()

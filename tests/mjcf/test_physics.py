@@ -1,6 +1,8 @@
 """Tests for mjcf.Physics: construction, stepping, resets, errors, state and copies."""
 
+import copy
 import logging
+import pickle
 
 import mujoco
 import numpy as np
@@ -293,6 +295,50 @@ def test_copy_copies_the_model_by_default(physics):
 
 def test_copy_can_share_the_model(physics):
     assert physics.copy(share_model=True).model.ptr is physics.model.ptr
+
+
+def _slider_model():
+    root = mjcf.RootElement(model="slider")
+    body = root.worldbody.add("body", name="cart")
+    body.add("joint", name="rail", type="slide", axis=[1, 0, 0])
+    body.add("geom", size=[0.1])
+    return root
+
+
+def test_pickled_physics_continues_the_same_trajectory(physics):
+    physics.data.qvel[:] = 0.3
+    physics.step(7)
+    restored = pickle.loads(pickle.dumps(physics))
+    assert restored.time() == physics.time()
+    physics.step(20)
+    restored.step(20)
+    np.testing.assert_array_equal(restored.data.qpos, physics.data.qpos)
+    assert restored.named.data.qpos["hinge"] == physics.named.data.qpos["hinge"]
+
+
+def test_physics_pickled_with_its_mjcf_model_binds_the_unpickled_elements():
+    root = _slider_model()
+    physics = mjcf.Physics.from_mjcf_model(root)
+    physics.bind(root.find("joint", "rail")).qpos = 0.25
+    root_again, physics_again = pickle.loads(pickle.dumps((root, physics)))
+    assert physics_again.bind(root_again.find("joint", "rail")).qpos == 0.25
+
+
+def test_deep_copied_physics_after_binding_has_its_own_data_and_elements():
+    root = _slider_model()
+    physics = mjcf.Physics.from_mjcf_model(root)
+    rail = root.find("joint", "rail")
+    physics.bind(rail).qpos = 0.25
+    copied = copy.deepcopy(physics)
+    copied.named.data.qpos["rail"] = 0.75
+    assert physics.bind(rail).qpos == 0.25
+    with pytest.raises(ValueError, match="copy.deepcopy binds its own elements"):
+        copied.bind(rail)
+
+
+def test_unpickled_physics_keeps_legacy_step_off(physics):
+    physics.legacy_step = False
+    assert pickle.loads(pickle.dumps(physics)).legacy_step is False
 
 
 def test_free_makes_the_physics_unusable(physics):
