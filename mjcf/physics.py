@@ -24,6 +24,8 @@ _LINE_NUMBER = re.compile(r"\bline (\d+)")
 _ELEMENT_NAME = re.compile(r"Element name '([^']*)'")
 _XML_NAME = re.compile(r"""\bname=["']([^"']*)["']""")
 _MAX_QUOTED_XML = 500
+# The name under which MJB bytes are handed to MuJoCo in a one-file virtual file system.
+_MJB_NAME = "model.mjb"
 
 
 def _log_mujoco_warning(message: str) -> None:
@@ -141,6 +143,22 @@ class Physics:
     def from_binary_path(cls, file_path: str) -> "Physics":
         """Loads a compiled MJB model file."""
         return cls.from_model(mujoco.MjModel.from_binary_path(str(file_path)))
+
+    @classmethod
+    def from_byte_string(cls, byte_string: bytes) -> "Physics":
+        """Loads a compiled model from MJB bytes (what ``mujoco.mj_saveModel`` writes).
+
+        Raises:
+          ValueError: if ``byte_string`` is not a MuJoCo model binary.
+        """
+        try:
+            model = mujoco.MjModel.from_binary_path(_MJB_NAME, {_MJB_NAME: bytes(byte_string)})
+        except ValueError as error:
+            raise ValueError(
+                f"Physics.from_byte_string: byte_string ({len(byte_string)} bytes) is not a "
+                f"MuJoCo model binary (MJB) that this MuJoCo can load: {error}"
+            ) from None
+        return cls.from_model(model)
 
     @classmethod
     def from_mjcf_model(cls, mjcf_model) -> "Physics":

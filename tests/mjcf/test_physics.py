@@ -84,6 +84,20 @@ def test_from_binary_path_loads_an_mjb_file(tmp_path):
     assert Physics.from_binary_path(str(path)).model.nv == 10
 
 
+def test_from_byte_string_loads_mjb_bytes():
+    model = mujoco.MjModel.from_xml_string(_xml())
+    buffer = np.zeros(mujoco.mj_sizeModel(model), np.uint8)
+    mujoco.mj_saveModel(model, None, buffer)
+    physics = Physics.from_byte_string(buffer.tobytes())
+    assert physics.model.nv == 10
+    np.testing.assert_array_equal(physics.model.body_pos, model.body_pos)
+
+
+def test_from_byte_string_of_other_bytes_names_the_argument():
+    with pytest.raises(ValueError, match="byte_string .11 bytes. is not a MuJoCo model binary"):
+        Physics.from_byte_string(b"<mujoco/>\n\n")
+
+
 def test_from_model_uses_the_given_model():
     model = mujoco.MjModel.from_xml_string(_xml())
     physics = Physics.from_model(model)
