@@ -193,6 +193,14 @@ class Environment(dm_env.Environment):
         self._physics_proxy = None
         self._snapshot = None
 
+    def __reduce_ex__(self, protocol):
+        raise TypeError(
+            "a composer.Environment cannot be copied or pickled (its task, entities, "
+            "observables and physics refer to each other and to live MuJoCo data); build a "
+            "new one from the same task factory and seed instead, or copy just the simulation "
+            "with env.physics.copy()"
+        )
+
     # Compiling.
 
     def _compile(self) -> None:

@@ -1,5 +1,7 @@
 """composer.Environment: the dm_env loop, specs, time limits and action checking."""
 
+import copy
+import pickle
 import weakref
 
 import dm_env
@@ -219,6 +221,15 @@ def test_close_frees_the_physics():
     env.close()
     with pytest.raises(ReferenceError):
         proxy.time()
+
+
+@pytest.mark.parametrize("copier", [copy.copy, copy.deepcopy, pickle.dumps])
+def test_copying_an_environment_says_how_to_get_another(copier):
+    env = composer.Environment(ReachTask())
+    env.reset()
+    with pytest.raises(TypeError, match=r"composer.Environment cannot be copied.*physics.copy"):
+        copier(env)
+    assert env.step(np.zeros(env.action_spec().shape)).step_type == dm_env.StepType.MID
 
 
 def _configured_env(substep_hook):
