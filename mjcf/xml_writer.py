@@ -210,11 +210,9 @@ class _Writer:
         scope prefix and class: its whole text, or its opening tag ("head"); anything else
         is built by `fresh_element`.
         """
-        if type(element) is AttachmentFrame:
-            self.kept(element, depth, prefix, dclass, self.frame, element, depth, dclass)
-            return
         stamp = self.stamp
-        if stamp is not None:
+        # An attachment frame's text is kept by `kept` (see `fresh_element`), not here.
+        if stamp is not None and type(element) is not AttachmentFrame:
             text = element._text_cache
             if (
                 text is not None
