@@ -13,7 +13,7 @@ from mjcf import binding as binding_module
 from mjcf import named_indexing
 from mjcf.field_layout import ModelLayout
 from mjcf.rendering import Renderers
-from mjcf.struct_wrappers import DataWrapper, ModelWrapper
+from mjcf.struct_wrappers import DataWrapper, ModelWrapper, flags_set
 
 _WARNING_NAMES = tuple(name for name in mujoco.mjtWarning.__members__ if name != "mjNWARNING")
 _RK4 = int(mujoco.mjtIntegrator.mjINT_RK4)
@@ -301,13 +301,8 @@ class Physics:
 
     def after_reset(self) -> None:
         """Runs forward with actuation disabled (no meaningful controls exist yet)."""
-        opt = self._sim.opt
-        previous = opt.disableflags
-        opt.disableflags = previous | _ACTUATION_DISABLED
-        try:
+        with flags_set(self._sim.opt, "disableflags", _ACTUATION_DISABLED):
             self._sim.forward()
-        finally:
-            opt.disableflags = previous
 
     @contextlib.contextmanager
     def reset_context(self) -> Iterator["Physics"]:

@@ -50,6 +50,17 @@ def _flag_bits(flags, enum_type, prefix: str) -> int:
     return bits
 
 
+@contextlib.contextmanager
+def flags_set(opt, field: str, bits: int) -> Iterator[None]:
+    """Sets `bits` in option field `field` ('disableflags' or 'enableflags') while active."""
+    previous = getattr(opt, field)
+    setattr(opt, field, previous | bits)
+    try:
+        yield
+    finally:
+        setattr(opt, field, previous)
+
+
 class _StructWrapper:
     """Forwards attribute access to a MuJoCo struct and caches its fixed-size arrays."""
 
@@ -110,27 +121,15 @@ class ModelWrapper(_StructWrapper):
         """The name of object ``object_id`` of ``object_type``; '' when it has none."""
         return mujoco.mj_id2name(self._ptr, _object_type(object_type), object_id) or ""
 
-    @contextlib.contextmanager
-    def disable(self, *flags) -> Iterator[None]:
+    def disable(self, *flags) -> contextlib.AbstractContextManager[None]:
         """Temporarily sets MuJoCo disable flags ('gravity', 'contact', 'actuation', ...)."""
-        opt = self._ptr.opt
-        previous = opt.disableflags
-        opt.disableflags = previous | _flag_bits(flags, mujoco.mjtDisableBit, _DISABLE_PREFIX)
-        try:
-            yield
-        finally:
-            opt.disableflags = previous
+        bits = _flag_bits(flags, mujoco.mjtDisableBit, _DISABLE_PREFIX)
+        return flags_set(self._ptr.opt, "disableflags", bits)
 
-    @contextlib.contextmanager
-    def enable(self, *flags) -> Iterator[None]:
+    def enable(self, *flags) -> contextlib.AbstractContextManager[None]:
         """Temporarily sets MuJoCo enable flags ('energy', 'multiccd', ...)."""
-        opt = self._ptr.opt
-        previous = opt.enableflags
-        opt.enableflags = previous | _flag_bits(flags, mujoco.mjtEnableBit, _ENABLE_PREFIX)
-        try:
-            yield
-        finally:
-            opt.enableflags = previous
+        bits = _flag_bits(flags, mujoco.mjtEnableBit, _ENABLE_PREFIX)
+        return flags_set(self._ptr.opt, "enableflags", bits)
 
     def __repr__(self):
         return f"ModelWrapper(nbody={self._ptr.nbody}, ngeom={self._ptr.ngeom}, nq={self._ptr.nq})"
