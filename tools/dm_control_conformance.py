@@ -1,0 +1,266 @@
+"""Runs dm_control 1.0.50's own composer/mjcf tests and manipulation suite on this project.
+
+Usage: ``python tools/dm_control_conformance.py [--floor 0.99] [--tasks-only | --tests-only]``
+
+Builds a scratch venv under ``.cache/dm_control_conformance`` with this project and
+``dm-control==1.0.50`` installed from PyPI, copies dm_control's public ``composer`` and
+``mjcf`` test files out of that install (nothing of dm_control is kept in the repository),
+and runs them with ``dm_control.composer`` / ``dm_control.mjcf`` served by this project
+through ``composer.dm_control_compat``. Exception types are checked, message wording is not.
+It then loads every ``dm_control.manipulation`` ``*_features`` task and ``reach_site_vision``
+through the same redirect and runs each for a reset and 100 random steps.
+
+Prints a per-file table, the failing test ids, a per-task table and the totals; exits 1 when
+the test pass rate is below ``--floor`` or a task fails.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import shutil
+import subprocess
+import sys
+import xml.etree.ElementTree as ElementTree
+from pathlib import Path
+from typing import NamedTuple
+
+REPO = Path(__file__).resolve().parent.parent
+CACHE = REPO / ".cache" / "dm_control_conformance"
+DM_CONTROL_VERSION = "1.0.50"
+TEST_EXTRAS = ["mock", "pytest"]
+
+#: Test files that check dm_control's own internals (its copied schema, its attribute
+#: classes, its debug mode), not behaviour that users rely on.
+EXCLUDED_TEST_FILES = {
+    "mjcf/attribute_test.py",
+    "mjcf/schema_test.py",
+    "mjcf/debugging_test.py",
+    "mjcf/code_for_debugging_test.py",
+}
+
+#: dm_control test helpers that its tests import under dm_control's names: they are
+#: served from dm_control's own files, not from this project.
+HELPER_MODULES = {
+    "dm_control.composer.hooks_test_utils": "composer/hooks_test_utils.py",
+    "dm_control.composer.observation.fake_physics": "composer/observation/fake_physics.py",
+}
+
+EPISODE_STEPS = 100
+
+_CONFTEST = '''
+"""Written by tools/dm_control_conformance.py: redirect, helpers, wording not checked."""
+import importlib.util
+import sys
+import unittest
+
+from composer import dm_control_compat
+
+dm_control_compat.install()
+
+import dm_control  # noqa: E402  (the real package, after the redirect)
+
+for _name, _relative in {helpers!r}.items():
+    _spec = importlib.util.spec_from_file_location(
+        _name, dm_control.__path__[0] + "/" + _relative
+    )
+    _module = importlib.util.module_from_spec(_spec)
+    sys.modules[_name] = _module
+    _spec.loader.exec_module(_module)
+
+from absl import flags  # noqa: E402
+from absl.testing import absltest  # noqa: E402
+
+flags.FLAGS.mark_as_parsed()
+
+
+def _raises_type_only(self, expected_exception, _expected_wording, *args, **kwargs):
+    return unittest.TestCase.assertRaises(self, expected_exception, *args, **kwargs)
+
+
+unittest.TestCase.assertRaisesRegex = _raises_type_only
+absltest.TestCase.assertRaisesWithLiteralMatch = _raises_type_only
+absltest.TestCase.assertRaisesWithPredicateMatch = _raises_type_only
+'''
+
+_TASK_RUNNER = """
+import json, sys, time
+import numpy as np
+from composer import dm_control_compat
+dm_control_compat.install()
+from dm_control import manipulation
+names = sorted(n for n in manipulation.ALL if n.endswith("_features")) + ["reach_site_vision"]
+results = {}
+for name in names:
+    try:
+        env = manipulation.load(name, seed=0)
+        spec = env.action_spec()
+        rng = np.random.RandomState(0)
+        start = time.perf_counter()
+        env.reset()
+        for _ in range(%d):
+            timestep = env.step(rng.uniform(spec.minimum, spec.maximum))
+            if timestep.last():
+                env.reset()
+        results[name] = {"ok": True, "seconds": time.perf_counter() - start}
+    except Exception as e:  # report every task, whatever fails
+        results[name] = {"ok": False, "error": f"{type(e).__name__}: {e}"[:300]}
+print("RESULTS" + json.dumps(results))
+""" % (EPISODE_STEPS,)
+
+
+class FileResult(NamedTuple):
+    """Counts of one dm_control test file's results."""
+
+    path: str
+    passed: int
+    failed: int
+    skipped: int
+
+
+def _run(cmd: list, **kwargs) -> subprocess.CompletedProcess:
+    return subprocess.run(cmd, check=True, **kwargs)
+
+
+def build_venv() -> Path:
+    """Creates (once) the scratch venv; returns its python."""
+    venv = CACHE / "venv"
+    python = venv / "bin" / "python"
+    stamp = venv / "conformance-stamp"
+    wanted = f"dm-control=={DM_CONTROL_VERSION} " + " ".join(TEST_EXTRAS)
+    if stamp.exists() and stamp.read_text() == wanted:
+        # Refresh the project itself: it is installed from the working tree every run.
+        _run([str(python), "-m", "pip", "install", "-q", "--no-deps", "-e", str(REPO)])
+        return python
+    shutil.rmtree(venv, ignore_errors=True)
+    _run([sys.executable, "-m", "venv", str(venv)])
+    _run([str(python), "-m", "pip", "install", "-q", "--upgrade", "pip"])
+    _run([str(python), "-m", "pip", "install", "-q", "-e", str(REPO)])
+    _run([str(python), "-m", "pip", "install", "-q", f"dm-control=={DM_CONTROL_VERSION}"])
+    _run([str(python), "-m", "pip", "install", "-q", *TEST_EXTRAS])
+    stamp.write_text(wanted)
+    return python
+
+
+def copy_tests(python: Path) -> Path:
+    """Copies dm_control's composer/mjcf test files and their assets out of the venv."""
+    location = subprocess.run(
+        [str(python), "-c", "import importlib.util as u; "
+         "print(u.find_spec('dm_control').submodule_search_locations[0])"],
+        check=True, capture_output=True, text=True,
+    ).stdout.strip()
+    source = Path(location)
+    destination = CACHE / "tests"
+    shutil.rmtree(destination, ignore_errors=True)
+    for package in ("composer", "mjcf"):
+        for path in (source / package).rglob("*"):
+            relative = path.relative_to(source).as_posix()
+            is_test = path.name.endswith("_test.py") and relative not in EXCLUDED_TEST_FILES
+            is_asset = "test_assets" in path.parts and path.is_file()
+            if is_test or is_asset:
+                # Renamed so that the copies never shadow the `composer`/`mjcf` packages.
+                target = destination / f"dm_control_{relative}"
+                target.parent.mkdir(parents=True, exist_ok=True)
+                shutil.copy2(path, target)
+    (destination / "conftest.py").write_text(_CONFTEST.format(helpers=HELPER_MODULES))
+    return destination
+
+
+def run_tests(python: Path, tests: Path) -> tuple[list[FileResult], list[str]]:
+    """Runs the copied tests; returns per-file counts and the failing test ids."""
+    report = CACHE / "junit.xml"
+    env = dict(os.environ, MUJOCO_GL=os.environ.get("MUJOCO_GL", "egl"))
+    subprocess.run(
+        [str(python), "-m", "pytest", "-q", "-p", "no:cacheprovider", "--import-mode=importlib",
+         "--continue-on-collection-errors",
+         f"--junitxml={report}", "-o", "junit_family=xunit1", str(tests)],
+        cwd=CACHE, env=env, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL,
+    )
+    counts: dict[str, list[int]] = {}
+    failing: list[str] = []
+    for case in ElementTree.parse(report).getroot().iter("testcase"):
+        path = _display_path(case.get("file") or case.get("classname", "?"))
+        bucket = counts.setdefault(path, [0, 0, 0])
+        outcome = {child.tag for child in case}
+        if outcome & {"failure", "error"}:
+            bucket[1] += 1
+            failing.append(f"{path}::{case.get('classname', '').split('.')[-1]}::{case.get('name')}")
+        elif "skipped" in outcome:
+            bucket[2] += 1
+        else:
+            bucket[0] += 1
+    results = [FileResult(path, *numbers) for path, numbers in sorted(counts.items())]
+    return results, failing
+
+
+def _display_path(path: str) -> str:
+    """`.cache/.../tests/dm_control_mjcf/x_test.py` -> `mjcf/x_test.py`."""
+    if "/tests/dm_control_" in path:
+        return path.split("/tests/dm_control_", 1)[1]
+    # A file that failed to import is reported by module name.
+    return path.split(".tests.dm_control_", 1)[-1].replace(".", "/") + ".py"
+
+
+def run_tasks(python: Path) -> dict:
+    """Loads and steps the manipulation tasks in the venv; returns name -> result."""
+    env = dict(os.environ, MUJOCO_GL=os.environ.get("MUJOCO_GL", "egl"))
+    completed = subprocess.run(
+        [str(python), "-c", _TASK_RUNNER], capture_output=True, text=True, env=env, cwd=CACHE
+    )
+    for line in completed.stdout.splitlines():
+        if line.startswith("RESULTS"):
+            return json.loads(line[len("RESULTS") :])
+    raise RuntimeError(f"the manipulation runner printed no results:\n{completed.stderr[-3000:]}")
+
+
+def print_test_table(results: list[FileResult], failing: list[str]) -> float:
+    width = max(len(r.path) for r in results)
+    print(f"{'dm_control test file':<{width}}  passed  failed  skipped")
+    for r in results:
+        print(f"{r.path:<{width}}  {r.passed:6d}  {r.failed:6d}  {r.skipped:7d}")
+    passed = sum(r.passed for r in results)
+    failed = sum(r.failed for r in results)
+    skipped = sum(r.skipped for r in results)
+    rate = passed / max(1, passed + failed)
+    print(f"{'total':<{width}}  {passed:6d}  {failed:6d}  {skipped:7d}   pass rate {rate:.1%}")
+    if failing:
+        print("\nfailing tests:")
+        for test_id in failing:
+            print(f"  {test_id}")
+    return rate
+
+
+def print_task_table(results: dict) -> int:
+    print(f"\n{'dm_control.manipulation task':<45} result")
+    for name, result in results.items():
+        text = f"ok ({result['seconds']:.1f} s)" if result["ok"] else f"FAIL {result['error']}"
+        print(f"{name:<45} {text}")
+    ok = sum(r["ok"] for r in results.values())
+    print(f"{'total':<45} {ok} of {len(results)} reset and ran {EPISODE_STEPS} steps")
+    return len(results) - ok
+
+
+def main() -> int:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--floor", type=float, default=0.0, help="minimum test pass rate")
+    parser.add_argument("--tests-only", action="store_true")
+    parser.add_argument("--tasks-only", action="store_true")
+    args = parser.parse_args()
+    CACHE.mkdir(parents=True, exist_ok=True)
+    python = build_venv()
+    status = 0
+    if not args.tasks_only:
+        results, failing = run_tests(python, copy_tests(python))
+        rate = print_test_table(results, failing)
+        if rate < args.floor:
+            print(f"pass rate {rate:.1%} is below the floor {args.floor:.1%}")
+            status = 1
+    if not args.tests_only:
+        if print_task_table(run_tasks(python)):
+            status = 1
+    return status
+
+
+if __name__ == "__main__":
+    sys.exit(main())
