@@ -84,7 +84,8 @@ absltest.TestCase.assertRaisesWithLiteralMatch = _raises_type_only
 absltest.TestCase.assertRaisesWithPredicateMatch = _raises_type_only
 '''
 
-_TASK_RUNNER = """
+_TASK_RUNNER = f"""
+EPISODE_STEPS = {EPISODE_STEPS}
 import json, sys, time
 import numpy as np
 from composer import dm_control_compat
@@ -99,15 +100,15 @@ for name in names:
         rng = np.random.RandomState(0)
         start = time.perf_counter()
         env.reset()
-        for _ in range(%d):
+        for _ in range(EPISODE_STEPS):
             timestep = env.step(rng.uniform(spec.minimum, spec.maximum))
             if timestep.last():
                 env.reset()
-        results[name] = {"ok": True, "seconds": time.perf_counter() - start}
+        results[name] = {{"ok": True, "seconds": time.perf_counter() - start}}
     except Exception as e:  # report every task, whatever fails
-        results[name] = {"ok": False, "error": f"{type(e).__name__}: {e}"[:300]}
+        results[name] = {{"ok": False, "error": f"{{type(e).__name__}}: {{e}}"[:300]}}
 print("RESULTS" + json.dumps(results))
-""" % (EPISODE_STEPS,)
+"""
 
 
 class FileResult(NamedTuple):
@@ -185,7 +186,8 @@ def run_tests(python: Path, tests: Path) -> tuple[list[FileResult], list[str]]:
         outcome = {child.tag for child in case}
         if outcome & {"failure", "error"}:
             bucket[1] += 1
-            failing.append(f"{path}::{case.get('classname', '').split('.')[-1]}::{case.get('name')}")
+            test_class = case.get("classname", "").split(".")[-1]
+            failing.append(f"{path}::{test_class}::{case.get('name')}")
         elif "skipped" in outcome:
             bucket[2] += 1
         else:
