@@ -84,8 +84,7 @@ absltest.TestCase.assertRaisesWithLiteralMatch = _raises_type_only
 absltest.TestCase.assertRaisesWithPredicateMatch = _raises_type_only
 '''
 
-_TASK_RUNNER = f"""
-EPISODE_STEPS = {EPISODE_STEPS}
+_TASK_RUNNER = """
 import json, sys, time
 import numpy as np
 from composer import dm_control_compat
@@ -100,13 +99,13 @@ for name in names:
         rng = np.random.RandomState(0)
         start = time.perf_counter()
         env.reset()
-        for _ in range(EPISODE_STEPS):
+        for _ in range(int(sys.argv[1])):
             timestep = env.step(rng.uniform(spec.minimum, spec.maximum))
             if timestep.last():
                 env.reset()
-        results[name] = {{"ok": True, "seconds": time.perf_counter() - start}}
+        results[name] = {"ok": True, "seconds": time.perf_counter() - start}
     except Exception as e:  # report every task, whatever fails
-        results[name] = {{"ok": False, "error": f"{{type(e).__name__}}: {{e}}"[:300]}}
+        results[name] = {"ok": False, "error": f"{type(e).__name__}: {e}"[:300]}
 print("RESULTS" + json.dumps(results))
 """
 
@@ -208,7 +207,7 @@ def run_tasks(python: Path) -> dict:
     """Loads and steps the manipulation tasks in the venv; returns name -> result."""
     env = dict(os.environ, MUJOCO_GL=os.environ.get("MUJOCO_GL", "egl"))
     completed = subprocess.run(
-        [str(python), "-c", _TASK_RUNNER], capture_output=True, text=True, env=env, cwd=CACHE
+        [str(python), "-c", _TASK_RUNNER, str(EPISODE_STEPS)], capture_output=True, text=True, env=env, cwd=CACHE
     )
     for line in completed.stdout.splitlines():
         if line.startswith("RESULTS"):
