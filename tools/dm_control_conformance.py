@@ -146,9 +146,15 @@ def build_venv() -> Path:
 def copy_tests(python: Path) -> Path:
     """Copies dm_control's composer/mjcf test files and their assets out of the venv."""
     location = subprocess.run(
-        [str(python), "-c", "import importlib.util as u; "
-         "print(u.find_spec('dm_control').submodule_search_locations[0])"],
-        check=True, capture_output=True, text=True,
+        [
+            str(python),
+            "-c",
+            "import importlib.util as u; "
+            "print(u.find_spec('dm_control').submodule_search_locations[0])",
+        ],
+        check=True,
+        capture_output=True,
+        text=True,
     ).stdout.strip()
     source = Path(location)
     destination = CACHE / "tests"
@@ -172,10 +178,24 @@ def run_tests(python: Path, tests: Path) -> tuple[list[FileResult], list[str]]:
     report = CACHE / "junit.xml"
     env = dict(os.environ, MUJOCO_GL=os.environ.get("MUJOCO_GL", "egl"))
     subprocess.run(
-        [str(python), "-m", "pytest", "-q", "-p", "no:cacheprovider", "--import-mode=importlib",
-         "--continue-on-collection-errors",
-         f"--junitxml={report}", "-o", "junit_family=xunit1", str(tests)],
-        cwd=CACHE, env=env, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL,
+        [
+            str(python),
+            "-m",
+            "pytest",
+            "-q",
+            "-p",
+            "no:cacheprovider",
+            "--import-mode=importlib",
+            "--continue-on-collection-errors",
+            f"--junitxml={report}",
+            "-o",
+            "junit_family=xunit1",
+            str(tests),
+        ],
+        cwd=CACHE,
+        env=env,
+        stdout=subprocess.DEVNULL,
+        stderr=subprocess.DEVNULL,
     )
     counts: dict[str, list[int]] = {}
     failing: list[str] = []
@@ -207,7 +227,11 @@ def run_tasks(python: Path) -> dict:
     """Loads and steps the manipulation tasks in the venv; returns name -> result."""
     env = dict(os.environ, MUJOCO_GL=os.environ.get("MUJOCO_GL", "egl"))
     completed = subprocess.run(
-        [str(python), "-c", _TASK_RUNNER, str(EPISODE_STEPS)], capture_output=True, text=True, env=env, cwd=CACHE
+        [str(python), "-c", _TASK_RUNNER, str(EPISODE_STEPS)],
+        capture_output=True,
+        text=True,
+        env=env,
+        cwd=CACHE,
     )
     for line in completed.stdout.splitlines():
         if line.startswith("RESULTS"):
