@@ -1,0 +1,174 @@
+"""dm_control's own manipulation tasks: this project + mujoco 4 vs dm_control 1.0.50 + 3.17.
+
+Usage: ``python benchmarks/dm_control_tasks.py [--trials 3] [--steps 200] [--resets 5]
+[--tasks NAME ...]``
+
+Builds two scratch venvs under ``.cache/dm_control_tasks`` (once): real dm_control 1.0.50 on
+mujoco 3.17.0, and dm_control 1.0.50 whose ``composer``/``mjcf`` are served by this project
+(``composer.dm_control_compat``) on the project's mujoco. The same unmodified task code, seeds
+and random actions run in both; trials alternate between the two. Prints a table of reset ms
+and step ms (medians over trials) and their ratio, ours / dm_control.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import statistics
+import subprocess
+import sys
+from pathlib import Path
+from typing import NamedTuple
+
+sys.path.insert(0, str(Path(__file__).resolve().parent.parent / "tools"))
+import scratch_venv  # noqa: E402
+
+DM_CONTROL = "dm-control==1.0.50"
+DM_CONTROL_MUJOCO = "mujoco==3.17.0"
+CACHE = scratch_venv.CACHE / "dm_control_tasks"
+
+# A worker loads each task once, then answers "TASK" lines with one trial's timings: the
+# mean reset time over RESETS resets and the mean step time over STEPS random actions.
+_WORKER = r"""
+import json, sys, time
+import numpy as np
+if sys.argv[1] == "ours":
+    from composer import dm_control_compat
+    dm_control_compat.install()
+from dm_control import manipulation
+resets, steps = int(sys.argv[2]), int(sys.argv[3])
+environments = {}
+print("READY", flush=True)
+for line in sys.stdin:
+    name = line.strip()
+    if name not in environments:
+        environments[name] = manipulation.load(name, seed=0)
+        environments[name].reset()
+    env = environments[name]
+    spec = env.action_spec()
+    rng = np.random.RandomState(0)
+    actions = rng.uniform(spec.minimum, spec.maximum, size=(steps,) + spec.shape)
+    env.random_state.seed(1)
+    start = time.perf_counter()
+    for _ in range(resets):
+        env.reset()
+    reset_seconds = (time.perf_counter() - start) / resets
+    step_seconds = 0.0
+    for action in actions:
+        start = time.perf_counter()
+        timestep = env.step(action)
+        step_seconds += time.perf_counter() - start
+        if timestep.last():
+            env.reset()
+    print(json.dumps({"reset": reset_seconds, "step": step_seconds / steps}), flush=True)
+"""
+
+
+class Timing(NamedTuple):
+    """Median reset and step times of one implementation on one task, in milliseconds."""
+
+    reset_ms: float
+    step_ms: float
+
+
+class Worker:
+    """A long-lived process in one venv that runs trials on request."""
+
+    def __init__(self, python: Path, flavour: str, resets: int, steps: int):
+        self._process = subprocess.Popen(
+            [str(python), "-c", _WORKER, flavour, str(resets), str(steps)],
+            stdin=subprocess.PIPE,
+            stdout=subprocess.PIPE,
+            text=True,
+            cwd=CACHE,
+            env=dict(os.environ, MUJOCO_GL=os.environ.get("MUJOCO_GL", "egl")),
+        )
+        if self._process.stdout.readline().strip() != "READY":
+            raise RuntimeError(f"the {flavour} worker did not start (see its stderr above)")
+
+    def trial(self, task: str) -> dict:
+        self._process.stdin.write(task + "\n")
+        self._process.stdin.flush()
+        line = self._process.stdout.readline()
+        if not line:
+            raise RuntimeError(f"the worker died on {task} (see its stderr above)")
+        return json.loads(line)
+
+    def close(self) -> None:
+        self._process.stdin.close()
+        self._process.wait(timeout=60)
+
+
+def _default_tasks(python: Path) -> list[str]:
+    listing = subprocess.run(
+        [str(python), "-c", "from dm_control import manipulation; print(*manipulation.ALL)"],
+        capture_output=True,
+        text=True,
+        check=True,
+        cwd=CACHE,
+    )
+    return sorted(name for name in listing.stdout.split() if name.endswith("_features"))
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--trials", type=int, default=3)
+    parser.add_argument("--steps", type=int, default=200)
+    parser.add_argument("--resets", type=int, default=5)
+    parser.add_argument("--tasks", nargs="*")
+    args = parser.parse_args()
+    CACHE.mkdir(parents=True, exist_ok=True)
+    dm_python = scratch_venv.ensure_venv(
+        CACHE / "dm_control-venv", [DM_CONTROL, DM_CONTROL_MUJOCO], project=False
+    )
+    our_python = scratch_venv.ensure_venv(CACHE / "ours-venv", [DM_CONTROL])
+    tasks = args.tasks or _default_tasks(dm_python)
+    workers = {
+        "ours": Worker(our_python, "ours", args.resets, args.steps),
+        "dm_control": Worker(dm_python, "dm_control", args.resets, args.steps),
+    }
+    samples = {(flavour, task): [] for flavour in workers for task in tasks}
+    for trial in range(args.trials):
+        for task in tasks:
+            # Alternate which implementation goes first, so drift hits both alike.
+            order = list(workers) if trial % 2 == 0 else list(reversed(workers))
+            for flavour in order:
+                samples[flavour, task].append(workers[flavour].trial(task))
+    for worker in workers.values():
+        worker.close()
+
+    def median(flavour: str, task: str) -> Timing:
+        runs = samples[flavour, task]
+        return Timing(
+            1e3 * statistics.median(r["reset"] for r in runs),
+            1e3 * statistics.median(r["step"] for r in runs),
+        )
+
+    print(
+        f"dm_control 1.0.50 manipulation tasks; ours = this project + mujoco (project venv), "
+        f"dm_control = dm_control + {DM_CONTROL_MUJOCO}; medians of {args.trials} trials, "
+        f"{args.resets} resets and {args.steps} steps each"
+    )
+    header = (
+        f"{'task':<42} {'reset ms':>9} {'dm reset':>9} {'ratio':>6}   "
+        f"{'step ms':>8} {'dm step':>8} {'ratio':>6}"
+    )
+    print(header)
+    reset_ratios, step_ratios = [], []
+    for task in tasks:
+        ours, theirs = median("ours", task), median("dm_control", task)
+        reset_ratios.append(ours.reset_ms / theirs.reset_ms)
+        step_ratios.append(ours.step_ms / theirs.step_ms)
+        print(
+            f"{task:<42} {ours.reset_ms:9.2f} {theirs.reset_ms:9.2f} {reset_ratios[-1]:5.2f}x   "
+            f"{ours.step_ms:8.3f} {theirs.step_ms:8.3f} {step_ratios[-1]:5.2f}x"
+        )
+    print(
+        f"{'max ratio (target reset <= 0.20x, step <= 0.50x)':<62} {max(reset_ratios):5.2f}x   "
+        f"{'':17} {max(step_ratios):5.2f}x"
+    )
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,44 @@
+"""Scratch virtual environments for the harnesses and benchmarks (not library code).
+
+``ensure_venv(path, requirements, project=True)`` creates ``path`` once with the given pip
+requirements (and this project installed editable), and reuses it while the requirements
+are unchanged. Import it from a tool or benchmark after putting ``tools/`` on ``sys.path``.
+"""
+
+from __future__ import annotations
+
+import shutil
+import subprocess
+import sys
+from pathlib import Path
+
+REPO = Path(__file__).resolve().parent.parent
+CACHE = REPO / ".cache"
+
+
+def _pip(python: Path, *args: str) -> None:
+    subprocess.run([str(python), "-m", "pip", "install", "-q", *args], check=True)
+
+
+def ensure_venv(path: Path, requirements: list[str], *, project: bool = True) -> Path:
+    """Returns the python of a venv at ``path`` holding ``requirements``.
+
+    The venv is rebuilt when the requirements differ from the ones it was built with. With
+    ``project`` the working tree is (re)installed editable on every call, without touching
+    its dependencies, so the venv always runs the current code.
+    """
+    python = path / "bin" / "python"
+    stamp = path / "scratch-venv-requirements"
+    wanted = "\n".join([*requirements, f"project={project}"])
+    if not (stamp.exists() and stamp.read_text() == wanted):
+        shutil.rmtree(path, ignore_errors=True)
+        subprocess.run([sys.executable, "-m", "venv", str(path)], check=True)
+        _pip(python, "--upgrade", "pip")
+        if project:
+            _pip(python, "-e", str(REPO))
+        if requirements:
+            _pip(python, *requirements)
+        stamp.write_text(wanted)
+    elif project:
+        _pip(python, "--no-deps", "-e", str(REPO))
+    return python
