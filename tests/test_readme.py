@@ -29,3 +29,17 @@ def test_manipulation_example_runs_an_episode_to_its_time_limit():
     timestep = namespace["timestep"]
     assert timestep.last()
     assert namespace["env"].physics.data.time >= 10.0
+
+
+def test_dm_control_redirect_example_runs_in_a_fresh_interpreter():
+    # The redirect changes the import system, so the block runs in its own process.
+    import subprocess
+    import sys
+
+    result = subprocess.run(
+        [sys.executable, "-c", _section_code("Run existing dm_control code")],
+        capture_output=True,
+        text=True,
+        timeout=120,
+    )
+    assert result.returncode == 0, result.stderr
