@@ -5,6 +5,8 @@ import io
 import pathlib
 import re
 
+import pytest
+
 README = pathlib.Path(__file__).resolve().parents[1] / "README.md"
 
 
@@ -29,3 +31,13 @@ def test_manipulation_example_runs_an_episode_to_its_time_limit():
     timestep = namespace["timestep"]
     assert timestep.last()
     assert namespace["env"].physics.data.time >= 10.0
+
+
+def test_video_example_writes_an_mp4_of_the_reset_frame_and_fifty_steps(tmp_path, monkeypatch):
+    iio = pytest.importorskip("imageio.v3", reason="the [video] extra is not installed")
+    monkeypatch.chdir(tmp_path)
+    printed = io.StringIO()
+    with contextlib.redirect_stdout(printed):
+        exec(compile(_section_code("Videos and the viewer"), str(README), "exec"), {})
+    assert printed.getvalue().strip() == "51 25.0"
+    assert iio.imread(tmp_path / "reach_site.mp4", index=None).shape == (51, 240, 320, 3)
