@@ -35,7 +35,16 @@ _INSTALL_HINT = "pip install 'mujoco-composer[video]' (imageio and imageio-ffmpe
 
 
 class EpisodeVideo(NamedTuple):
-    """What `record_video` wrote."""
+    """A written episode video.
+
+    Attributes:
+      path: the video file.
+      frames: frames handed to the writer, ``steps + 1`` (a gif decodes to fewer when
+        consecutive frames are identical; see the module docstring).
+      fps: frames per second.
+      episode_return: the sum of the episode's rewards.
+      steps: environment steps taken.
+    """
 
     path: pathlib.Path
     frames: int
