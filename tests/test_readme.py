@@ -5,6 +5,8 @@ import io
 import pathlib
 import re
 
+import pytest
+
 README = pathlib.Path(__file__).resolve().parents[1] / "README.md"
 
 
@@ -43,3 +45,13 @@ def test_dm_control_redirect_example_runs_in_a_fresh_interpreter():
         timeout=120,
     )
     assert result.returncode == 0, result.stderr
+
+
+def test_video_example_writes_an_mp4_of_the_reset_frame_and_fifty_steps(tmp_path, monkeypatch):
+    iio = pytest.importorskip("imageio.v3", reason="the [video] extra is not installed")
+    monkeypatch.chdir(tmp_path)
+    printed = io.StringIO()
+    with contextlib.redirect_stdout(printed):
+        exec(compile(_section_code("Videos and the viewer"), str(README), "exec"), {})
+    assert printed.getvalue().strip() == "51 25.0"
+    assert iio.imread(tmp_path / "reach_site.mp4", index=None).shape == (51, 240, 320, 3)

@@ -1,0 +1,274 @@
+"""Interactive viewer: a `composer.Environment` in MuJoCo's passive viewer, acted on in real time.
+
+`launch` opens ``mujoco.viewer.launch_passive`` on the environment's physics and steps the
+environment itself, sleeping so that each control step lasts ``control_timestep / speed``
+seconds of wall-clock time (when stepping is slower than that, it runs as fast as it can).
+Keys, read through launch_passive's ``key_callback``:
+
+==============  ===============================================
+space           pause / resume
+right arrow     one step while paused
+backspace       start a new episode
+``+`` / ``-``   double / halve the speed (1/16x to 16x)
+==============  ===============================================
+
+The step in the episode, last reward, episode return and speed are drawn in the window's
+top-left corner with ``Handle.set_texts``. MuJoCo releases whose viewer lacks
+``set_texts`` get the same line logged (absl ``logging.info``) at most once a second instead.
+
+MuJoCo's viewer runs its own key handling as well; in particular its backspace resets the
+MjData, which our reset then overwrites with the task's initial state.
+
+Needs a display and GLFW (the ``glfw`` package comes with ``mujoco``); on a headless
+machine run it under Xvfb. Closing the window ends `launch`.
+"""
+
+from __future__ import annotations
+
+import math
+import numbers
+import threading
+import time
+from collections.abc import Callable
+from typing import TYPE_CHECKING, Any, NamedTuple
+
+import glfw
+import mujoco
+import mujoco.viewer
+import numpy as np
+from absl import logging
+
+if TYPE_CHECKING:
+    import dm_env
+
+    import composer
+
+Policy = Callable[["dm_env.TimeStep"], Any]
+
+MIN_SPEED = 1 / 16
+MAX_SPEED = 16.0
+# How often the window is refreshed while paused, in seconds.
+_PAUSED_REFRESH = 1 / 60
+# Further behind real time than this, the clock restarts instead of catching up.
+_MAX_LAG = 0.1
+
+
+class ViewerStatus(NamedTuple):
+    """What the viewer shows after a refresh; `launch` returns the last one."""
+
+    steps: int
+    episodes: int
+    episode_step: int
+    reward: float | None
+    episode_return: float
+    speed: float
+    paused: bool
+
+
+class Controls:
+    """Key presses (from the viewer's render thread) turned into requests for the loop."""
+
+    def __init__(self, speed: float = 1.0):
+        self._lock = threading.Lock()
+        self.paused = False
+        self.speed = _speed(speed)
+        self._single_steps = 0
+        self._reset = False
+
+    def on_key(self, keycode: int) -> None:
+        """Handles one GLFW key code; unknown keys are ignored."""
+        with self._lock:
+            if keycode == glfw.KEY_SPACE:
+                self.paused = not self.paused
+            elif keycode == glfw.KEY_RIGHT and self.paused:
+                self._single_steps += 1
+            elif keycode == glfw.KEY_BACKSPACE:
+                self._reset = True
+            elif keycode in (glfw.KEY_EQUAL, glfw.KEY_KP_ADD):
+                self.speed = min(self.speed * 2, MAX_SPEED)
+            elif keycode in (glfw.KEY_MINUS, glfw.KEY_KP_SUBTRACT):
+                self.speed = max(self.speed / 2, MIN_SPEED)
+
+    def take_reset(self) -> bool:
+        """True once per backspace press."""
+        with self._lock:
+            requested, self._reset = self._reset, False
+            return requested
+
+    def take_step(self) -> bool:
+        """True if the environment should step now: running, or a single step is pending."""
+        with self._lock:
+            if not self.paused:
+                return True
+            if self._single_steps:
+                self._single_steps -= 1
+                return True
+            return False
+
+
+def _speed(speed) -> float:
+    if (
+        isinstance(speed, bool)
+        or not isinstance(speed, numbers.Real)
+        or not MIN_SPEED <= speed <= MAX_SPEED
+    ):
+        raise ValueError(f"speed: expected a number in [{MIN_SPEED}, {MAX_SPEED}], got {speed!r}")
+    return float(speed)
+
+
+class _Window(NamedTuple):
+    handle: mujoco.viewer.Handle
+    thread: threading.Thread
+    data: mujoco.MjData
+
+
+def _open_window(physics, controls: Controls, show_ui: bool) -> _Window:
+    # launch_passive runs the window in a thread it does not hand out; it is the one thread
+    # it adds, and joining it after close() lets GLFW tear down before the process exits.
+    before = set(threading.enumerate())
+    data = physics.data.ptr
+    handle = mujoco.viewer.launch_passive(
+        physics.model.ptr,
+        data,
+        key_callback=controls.on_key,
+        show_left_ui=show_ui,
+        show_right_ui=show_ui,
+    )
+    (thread,) = [t for t in threading.enumerate() if t not in before]
+    return _Window(handle, thread, data)
+
+
+def _close_window(window: _Window) -> None:
+    window.handle.close()
+    window.thread.join()
+
+
+class _StatusDisplay:
+    """Writes the status into the window, or logs it where the viewer cannot draw text."""
+
+    def __init__(self):
+        self._last_log = -math.inf
+
+    def show(self, handle, status: ViewerStatus) -> None:
+        reward = "-" if status.reward is None else f"{status.reward:.3f}"
+        speed = f"{status.speed:g}x" + (" paused" if status.paused else "")
+        labels = ("step", "reward", "return", "speed")
+        values = (str(status.episode_step), reward, f"{status.episode_return:.3f}", speed)
+        if hasattr(handle, "set_texts"):
+            handle.set_texts(
+                [
+                    (None, mujoco.mjtGridPos.mjGRID_TOPLEFT, "\n".join(labels), "\n".join(values)),
+                    (
+                        None,
+                        mujoco.mjtGridPos.mjGRID_BOTTOMLEFT,
+                        "space\nright\nbackspace\n+ / -",
+                        "pause\nstep (paused)\nreset\nspeed",
+                    ),
+                ]
+            )
+            return
+        now = time.monotonic()
+        if now - self._last_log >= 1.0:
+            self._last_log = now
+            logging.info(", ".join(f"{k} {v}" for k, v in zip(labels, values)))
+
+
+def launch(
+    environment: composer.Environment,
+    policy: Policy | None = None,
+    *,
+    speed: float = 1.0,
+    max_steps: int | None = None,
+    on_refresh: Callable[[mujoco.viewer.Handle, ViewerStatus], None] | None = None,
+    show_ui: bool = False,
+) -> ViewerStatus:
+    """Shows `environment` in a window and runs `policy` on it in real time until closed.
+
+    Resets the environment, then steps it with `policy` (a callable TimeStep -> action;
+    zero actions of the action spec's shape when None), starting a new episode after each
+    LAST step or backspace. Blocks until the window is closed or `max_steps` steps were
+    taken, then closes the window.
+
+    Args:
+      environment: a `composer.Environment`.
+      policy: a callable TimeStep -> action, or None for zero actions.
+      speed: initial playback speed, a multiple of real time in [1/16, 16].
+      max_steps: stop after this many steps in all (None: only when the window closes).
+      on_refresh: called with the viewer handle and the `ViewerStatus` after each window
+        refresh, in the calling thread (for scripting and tests; calling
+        ``handle.close()`` ends `launch` like closing the window).
+      show_ui: show MuJoCo's left and right settings panels.
+
+    Returns:
+      The last `ViewerStatus` (total steps, episodes started, ...).
+
+    Raises:
+      ValueError: naming the argument for a bad `speed`, `max_steps` or `policy`.
+    """
+    controls = Controls(speed)
+    if max_steps is not None and (
+        isinstance(max_steps, bool) or not isinstance(max_steps, numbers.Integral) or max_steps < 1
+    ):
+        raise ValueError(f"max_steps: expected an integer >= 1 or None, got {max_steps!r}")
+    if policy is not None and not callable(policy):
+        raise ValueError(f"policy: expected a callable TimeStep -> action or None, got {policy!r}")
+    control_timestep = environment.control_timestep()
+    display = _StatusDisplay()
+
+    timestep = environment.reset()
+    zero_action = _zero_action(environment)
+    steps, episodes, episode_step, episode_return = 0, 1, 0, 0.0
+    status = ViewerStatus(0, 1, 0, None, 0.0, controls.speed, controls.paused)
+    window = _open_window(environment.physics, controls, show_ui)
+    try:
+        deadline = time.perf_counter()
+        while window.handle.is_running() and (max_steps is None or steps < max_steps):
+            stepped = False
+            if controls.take_reset() or timestep.last():
+                timestep = environment.reset()
+                zero_action = _zero_action(environment)
+                episodes, episode_step, episode_return = episodes + 1, 0, 0.0
+                if environment.physics.data.ptr is not window.data:
+                    # A recompile changed the model's structure: show the new Physics.
+                    _close_window(window)
+                    window = _open_window(environment.physics, controls, show_ui)
+            elif controls.take_step():
+                action = zero_action if policy is None else policy(timestep)
+                timestep = environment.step(action)
+                steps, episode_step, stepped = steps + 1, episode_step + 1, True
+                if timestep.reward is not None:
+                    episode_return += float(np.sum(timestep.reward))
+            reward = None if timestep.reward is None else float(np.sum(timestep.reward))
+            status = ViewerStatus(
+                steps,
+                episodes,
+                episode_step,
+                reward,
+                episode_return,
+                controls.speed,
+                controls.paused,
+            )
+            display.show(window.handle, status)
+            window.handle.sync()
+            if on_refresh is not None:
+                on_refresh(window.handle, status)
+            period = control_timestep / controls.speed if stepped else _PAUSED_REFRESH
+            deadline = _sleep_until(deadline + period)
+    finally:
+        _close_window(window)
+    return status
+
+
+def _zero_action(environment) -> np.ndarray:
+    spec = environment.action_spec()
+    return np.zeros(spec.shape, spec.dtype)
+
+
+def _sleep_until(deadline: float) -> float:
+    """Sleeps until `deadline` (perf_counter seconds); returns the deadline to count from."""
+    now = time.perf_counter()
+    if now > deadline + _MAX_LAG:
+        return now
+    if deadline > now:
+        time.sleep(deadline - now)
+    return deadline
