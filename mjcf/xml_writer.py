@@ -33,6 +33,11 @@ _FULL_PRECISION = (17, 0)
 _DEFAULT = constants.DEFAULT
 _JOINT = constants.JOINT
 _MAIN = "main"
+_WORLD = "world"
+# Sections whose elements MuJoCo only ever finds by the name the user gave (or, for file
+# assets, by their file name): their unnamed elements are written unnamed.
+_NAMED_BY_USER = ("asset", "custom")
+_BODY = constants.BODY
 _TOP_ONLY_SECTIONS = ("statistic",)
 # Element._xml_cache is (precision key, plain attribute text, stamp, scope prefix, inherited
 # class, opening tag, class the children inherit); the last five are None when only the plain
@@ -175,6 +180,9 @@ class _Writer:
                     return text
             target = root.find(namespace, value)
             if target is None:
+                if value == _WORLD and namespace == _BODY and not self.prefix_of(root):
+                    # MuJoCo's name for the world body, which the top model may refer to.
+                    return _WORLD
                 if element._spec.namespace is None and _in_defaults(element):
                     # MuJoCo only checks references of defaults that something uses.
                     return _escape(self.prefix_of(root) + value)
@@ -269,6 +277,10 @@ class _Writer:
             elif spec.namespace == _JOINT:
                 # An attachment frame's first unnamed joint is named after the frame.
                 head = f'<{tag} name="{element._generated_name(prefix)}"{static}'
+            elif element._parent._spec.name in _NAMED_BY_USER and "file" not in attributes:
+                # MuJoCo decides whether such an element needs a name (a material does, a
+                # skybox texture does not); a generated one would hide its error.
+                head = f"<{tag}{static}"
             else:
                 auto_id = element._auto_id or element._unnamed_id()
                 head = f'<{tag} name="{prefix or _SEP}{auto_id}"{static}'
