@@ -16,6 +16,7 @@ import copy
 import enum
 import os
 import random
+import re
 import shutil
 import tempfile
 from typing import NamedTuple
@@ -48,6 +49,7 @@ class Verdict(enum.Enum):
     MISMATCH = "compiled differently"
     CRASH = "crash"
     UNCLEAR = "unclear exception"
+    DOCUMENTED = "documented difference"
     MUJOCO_CRASH = "MuJoCo itself crashed"
 
 
@@ -146,8 +148,44 @@ def _names_a_thing(message: str) -> bool:
     return any(mark in message for mark in ("<", "Element", "element", "'", "file", "line"))
 
 
-def compare(theirs: Outcome, ours: Outcome) -> Result:
-    """Classifies our outcome against MuJoCo's on the same document."""
+_DANGLING = re.compile(r"attribute '(\w+)' refers to '([^']*)', but model .* has no '(\w+)'")
+_MUJOCO_ELEMENT = re.compile(r"Element '(\w+)'")
+
+
+def documented_difference(text: str, theirs: Outcome, ours: Outcome) -> str | None:
+    """Which documented difference (docs/mujoco_differences.md) explains a disagreement."""
+    if theirs.model is not None and ours.error is not None:
+        tree = etree.fromstring(text.encode())
+        message = str(ours.error)
+        match = _DANGLING.search(message)
+        if match and match.group(2) != "world":
+            value, namespace = match.group(2), match.group(3)
+            names = {
+                e.get("name")
+                for e in _elements(tree)
+                if getattr(_spec_of(e), "namespace", None) == namespace
+            }
+            if value not in names:
+                return "a reference to a missing element is an error, even one MuJoCo ignores"
+        if isinstance(ours.error, FileNotFoundError) and "attribute" in message:
+            return "a missing file is an error, even one MuJoCo does not read"
+        if "has no attribute" in message and any(True for _ in tree.iter("frame")):
+            return "an unknown attribute is an error, also inside <frame>"
+    if ours.model is not None and "required attribute missing" in str(theirs.error):
+        match = _MUJOCO_ELEMENT.search(str(theirs.error))
+        tree = etree.fromstring(text.encode())
+        if match and any(len(e) == 0 and not e.attrib for e in tree.iter(match.group(1))):
+            return "an empty element is not written"
+    return None
+
+
+def compare(theirs: Outcome, ours: Outcome, text: str | None = None) -> Result:
+    """Classifies our outcome against MuJoCo's on the same document (`text`, if given, lets
+    documented differences be recognised)."""
+    if text is not None and (theirs.model is None) != (ours.model is None):
+        reason = documented_difference(text, theirs, ours)
+        if reason is not None:
+            return Result(Verdict.DOCUMENTED, reason)
     if ours.error is not None and not isinstance(ours.error, DOCUMENTED_ERRORS):
         return Result(Verdict.CRASH, f"{type(ours.error).__name__}: {ours.error}")
     if ours.error is not None and not _names_a_thing(str(ours.error)):
@@ -654,7 +692,7 @@ class Workspace:
             return Result(Verdict.MUJOCO_CRASH, f"{type(theirs.error).__name__}: {theirs.error}")
         if mujoco_done is not None:
             mujoco_done()
-        return compare(theirs, our_outcome(self.path))
+        return compare(theirs, our_outcome(self.path), document.text)
 
     def close(self) -> None:
         shutil.rmtree(self.directory, ignore_errors=True)
