@@ -51,6 +51,7 @@ EPISODE_STEPS = 100
 
 _CONFTEST = '''
 """Written by tools/dm_control_conformance.py: redirect, helpers, wording not checked."""
+import importlib
 import importlib.util
 import sys
 import unittest
@@ -68,6 +69,9 @@ for _name, _relative in {helpers!r}.items():
     _module = importlib.util.module_from_spec(_spec)
     sys.modules[_name] = _module
     _spec.loader.exec_module(_module)
+    # `from dm_control.composer import hooks_test_utils` looks the name up on the package.
+    _parent, _, _child = _name.rpartition(".")
+    setattr(importlib.import_module(_parent), _child, _module)
 
 from absl import flags  # noqa: E402
 from absl.testing import absltest  # noqa: E402
