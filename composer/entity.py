@@ -69,10 +69,13 @@ class Entity(abc.ABC):
 
     @property
     def root_body(self):
-        """The body carrying this entity: its attachment frame, or its worldbody if unattached."""
-        if self.parent is not None:
-            return mjcf.get_attachment_frame(self.mjcf_model)
-        return self.mjcf_model.worldbody
+        """The body carrying this entity: its attachment frame, or its worldbody if unattached.
+
+        The frame is returned whenever the MJCF model is attached, also when that was done
+        with `mjcf` directly (`site.attach(entity.mjcf_model)`) rather than `Entity.attach`.
+        """
+        frame = mjcf.get_attachment_frame(self.mjcf_model)
+        return self.mjcf_model.worldbody if frame is None else frame
 
     def iter_entities(self, exclude_self: bool = False):
         """Yields this entity (unless `exclude_self`) and everything attached below it.

@@ -103,6 +103,21 @@ def test_root_body_is_worldbody_when_unattached_and_frame_when_attached():
     assert box.root_body is frame
 
 
+def test_model_attached_with_mjcf_directly_is_carried_by_its_frame():
+    arena, box = Floor(), Box()
+    site = arena.mjcf_model.worldbody.add("site", name="mount", xyaxes=[0, 1, 0, -1, 0, 0])
+    frame = site.attach(box.mjcf_model)
+    assert box.root_body is frame
+    physics = _compiled(arena)
+    # The frame's x axis is the world's y axis, its y axis the world's -x axis.
+    np.testing.assert_allclose(
+        box.global_vector_to_local_frame(physics, [0, 1, 0]), [1, 0, 0], atol=1e-12
+    )
+    np.testing.assert_allclose(
+        box.global_vector_to_local_frame(physics, [-1, 0]), [0, 1], atol=1e-12
+    )
+
+
 def test_create_root_joints_adds_a_free_joint():
     arena, box = Floor(), Box()
     frame = arena.attach(box)
