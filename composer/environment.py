@@ -69,8 +69,9 @@ class Environment(dm_env.Environment):
         indistinguishable and much faster. A recompile that changed only parameter
         values (colours, sizes, masses, ...) loads them into the current model, so
         the Physics and its bindings carry over; one that changed the model's
-        structure gives a new Physics. If False the model is compiled once and
-        changes made to it during an episode persist.
+        structure gives a new Physics. If False, this happens only before the first
+        episode (so `after_compile` hooks added after construction still run once), and
+        changes made to the model during an episode persist.
       fixed_initial_state: restore the random state at every reset, so that every
         episode starts from the same state.
       delayed_observation_padding: an `ObservationPadding`.
@@ -132,6 +133,7 @@ class Environment(dm_env.Environment):
         self._snapshot = None
         self._compiled_modification_count = None
         self._reset_next_step = True
+        self._episode_mjcf_prepared = False
         self._compile()
         self._observation_updater.reset(self._physics_proxy, self._random_state)
         self._fixed_random_state = self._random_state.get_state() if fixed_initial_state else None
@@ -297,12 +299,13 @@ class Environment(dm_env.Environment):
                 attempt += 1
 
     def _reset_attempt(self) -> dm_env.TimeStep:
-        if self._recompile_mjcf_every_episode:
+        if self._recompile_mjcf_every_episode or not self._episode_mjcf_prepared:
             self._hooks.initialize_episode_mjcf(self._random_state)
             if self._snapshot is None or self._model_changed_since_compile():
                 self._compile()
             else:
                 self._restore_compiled_model()
+            self._episode_mjcf_prepared = True
         with self._physics.reset_context():
             self._hooks.initialize_episode(self._physics_proxy, self._random_state)
         self._observation_updater.reset(self._physics_proxy, self._random_state)

@@ -160,7 +160,7 @@ def test_initialize_episode_mjcf_changes_are_compiled_before_the_episode():
     np.testing.assert_allclose(env.physics.bind(task.box.geom).size, [0.2, 0.2, 0.2])
 
 
-def test_without_recompiling_every_episode_model_writes_persist_and_mjcf_hooks_are_skipped():
+def test_without_recompiling_every_episode_model_writes_persist_and_mjcf_hooks_run_once():
     class CountsMjcfHooks(ReachTask):
         mjcf_hook_calls = 0
 
@@ -173,7 +173,19 @@ def test_without_recompiling_every_episode_model_writes_persist_and_mjcf_hooks_a
     env.physics.bind(task.box.geom).rgba = [1, 0, 0, 1]
     env.reset()
     np.testing.assert_array_equal(env.physics.bind(task.box.geom).rgba, [1, 0, 0, 1])
-    assert task.mjcf_hook_calls == 0
+    assert task.mjcf_hook_calls == 1
+
+
+def test_without_recompiling_every_episode_a_late_after_compile_hook_runs_at_first_reset():
+    calls = []
+    env = composer.Environment(ReachTask(), recompile_mjcf_every_episode=False)
+    env.add_extra_hook("after_compile", lambda physics, random_state: calls.append(1))
+    env.reset()
+    assert len(calls) == 1
+    for _ in range(3):
+        env.reset()
+        env.step(np.zeros(env.action_spec().shape))
+    assert len(calls) == 1
 
 
 def test_fixed_initial_state_starts_every_episode_identically():
