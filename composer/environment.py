@@ -299,6 +299,8 @@ class Environment(dm_env.Environment):
                 attempt += 1
 
     def _reset_attempt(self) -> dm_env.TimeStep:
+        # Hooks replaced on the task or an entity since the last episode take effect now.
+        self._hooks.refresh_entity_hooks()
         if self._recompile_mjcf_every_episode or not self._episode_mjcf_prepared:
             self._hooks.initialize_episode_mjcf(self._random_state)
             if self._snapshot is None or self._model_changed_since_compile():

@@ -249,3 +249,26 @@ def test_control_timestep_changed_between_episodes_applies_from_the_next_reset()
     env.reset()
     env.step(np.zeros(2))
     assert env.physics.time() == pytest.approx(0.006)
+
+
+def test_task_hook_replaced_between_episodes_runs_from_the_next_reset():
+    task = ReachTask()
+    env = composer.Environment(task)
+    env.reset()
+
+    def put_box_at_fixed_spot(physics, random_state):
+        task.box.set_pose(physics, position=[0.7, 0.1, 0.05])
+
+    task.initialize_episode = put_box_at_fixed_spot
+    np.testing.assert_allclose(env.reset().observation["box/position"], [[0.7, 0.1, 0.05]])
+
+
+def test_entity_hook_replaced_between_episodes_runs_from_the_next_reset():
+    task = ReachTask()
+    env = composer.Environment(task)
+    env.reset()
+    calls = []
+    task.box.after_step = lambda physics, random_state: calls.append(physics.data.time)
+    env.reset()
+    env.step(np.zeros(env.action_spec().shape))
+    assert calls == [pytest.approx(0.02)]
