@@ -247,6 +247,19 @@ class Entity(abc.ABC):
         if angular_velocity is not None:
             qvel[3:] = angular_velocity
 
+    def configure_joints(self, physics, position) -> None:
+        """Sets the positions of the joints in this entity's own MJCF model.
+
+        `position` holds the `qpos` values of the joints in
+        `mjcf_model.find_all('joint', exclude_attachments=True)` order. Joints inside
+        attached entities are left alone, but the root joints of attached entities (in
+        their attachment frames, which belong to this model) are included. Subclasses
+        with actuated joints may override this to keep the actuators' controls consistent
+        with the new positions.
+        """
+        joints = self.mjcf_model.find_all("joint", exclude_attachments=True)
+        physics.bind(joints).qpos = position
+
     def global_vector_to_local_frame(self, physics, vec_in_world_frame) -> np.ndarray:
         """Expresses world-frame vectors (last axis of size 2 or 3) in this entity's frame.
 

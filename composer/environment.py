@@ -3,6 +3,7 @@
 import enum
 import math
 import numbers
+import warnings
 import weakref
 
 import dm_env
@@ -186,6 +187,27 @@ class Environment(dm_env.Environment):
     def discount_spec(self):
         spec = self._task.get_discount_spec()
         return super().discount_spec() if spec is None else spec
+
+    def step_spec(self) -> dm_env.TimeStep:
+        """Deprecated: use `reward_spec()` and `discount_spec()`.
+
+        Returns a TimeStep of the task's reward and discount specs and the observation spec.
+
+        Raises:
+          NotImplementedError: if the task defines no reward spec or no discount spec.
+        """
+        warnings.warn(
+            "Environment.step_spec is deprecated; use reward_spec() and discount_spec()",
+            DeprecationWarning,
+            stacklevel=2,
+        )
+        reward, discount = self._task.get_reward_spec(), self._task.get_discount_spec()
+        if reward is None or discount is None:
+            raise NotImplementedError(
+                f"step_spec: the task {type(self._task).__name__} defines no "
+                f"{'reward' if reward is None else 'discount'} spec"
+            )
+        return dm_env.TimeStep(None, reward, discount, self.observation_spec())
 
     def close(self) -> None:
         """Frees the physics; the environment cannot be used afterwards."""

@@ -260,3 +260,29 @@ def test_free_prop_observables_report_pose_and_velocity_of_the_body():
     np.testing.assert_allclose(value("orientation"), _quat_about_z(0.4))
     np.testing.assert_allclose(value("linear_velocity"), [0.5, 0, 0], atol=1e-12)
     np.testing.assert_allclose(value("angular_velocity"), [0, 0, 1.5], atol=1e-12)
+
+
+def test_configure_joints_sets_the_entity_own_joint_positions():
+    arena, arm = Floor(), Arm()
+    arena.attach(arm)
+    physics = _compiled(arena)
+    arm.configure_joints(physics, [0.3, -0.4])
+    np.testing.assert_allclose(physics.named.data.qpos[["arm/shoulder", "arm/elbow"]], [0.3, -0.4])
+
+
+def test_configure_joints_leaves_joints_of_attached_entities_alone():
+    arena, arm, forearm = Floor(), Arm(), Arm()
+    arena.attach(arm)
+    arm.attach(forearm)
+    physics = _compiled(arena)
+    arm.configure_joints(physics, [0.3, -0.4])
+    np.testing.assert_allclose(physics.data.qpos, [0.3, -0.4, 0.0, 0.0])
+    assert [physics.model.joint(i).name for i in range(2)] == ["arm/shoulder", "arm/elbow"]
+
+
+def test_configure_joints_includes_root_joints_of_attached_free_entities():
+    arena, box = Floor(), Box()
+    arena.add_free_entity(box)
+    physics = _compiled(arena)
+    arena.configure_joints(physics, [1, 2, 3, 0, 1, 0, 0])
+    np.testing.assert_allclose(box.get_pose(physics)[0], [1, 2, 3])

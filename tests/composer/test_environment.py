@@ -153,6 +153,21 @@ def test_reward_and_discount_specs_come_from_the_task_when_it_defines_them():
     assert env.discount_spec().dtype == np.float32
 
 
+def test_deprecated_step_spec_bundles_task_specs_with_a_warning():
+    env = composer.Environment(CustomSpecs())
+    with pytest.warns(DeprecationWarning, match="reward_spec"):
+        spec = env.step_spec()
+    assert spec.reward.shape == (2,)
+    assert spec.discount.dtype == np.float32
+    assert spec.observation == env.observation_spec()
+
+
+def test_deprecated_step_spec_without_task_specs_is_not_implemented():
+    env = composer.Environment(ReachTask())
+    with pytest.warns(DeprecationWarning), pytest.raises(NotImplementedError, match="reward"):
+        env.step_spec()
+
+
 def test_physics_property_is_a_weak_proxy():
     env = composer.Environment(ReachTask())
     assert isinstance(env.physics, weakref.ProxyType)
