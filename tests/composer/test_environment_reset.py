@@ -160,6 +160,25 @@ def test_initialize_episode_mjcf_changes_are_compiled_before_the_episode():
     np.testing.assert_allclose(env.physics.bind(task.box.geom).size, [0.2, 0.2, 0.2])
 
 
+@pytest.mark.xfail(
+    raises=ValueError,
+    strict=False,
+    reason="mjcf attribute arrays are read-only until in-place writes are supported",
+)
+def test_in_place_mjcf_writes_in_initialize_episode_mjcf_are_compiled():
+    # dm_control's Duplo randomises its stud radius this way every episode.
+    class WidensBoxInPlace(ReachTask):
+        def initialize_episode_mjcf(self, random_state):
+            self.box.geom.size[0] += 0.05
+
+    task = WidensBoxInPlace()
+    env = composer.Environment(task)
+    env.reset()
+    np.testing.assert_allclose(env.physics.bind(task.box.geom).size, [0.1, 0.05, 0.05])
+    env.reset()
+    np.testing.assert_allclose(env.physics.bind(task.box.geom).size, [0.15, 0.05, 0.05])
+
+
 def test_without_recompiling_every_episode_model_writes_persist_and_mjcf_hooks_run_once():
     class CountsMjcfHooks(ReachTask):
         mjcf_hook_calls = 0
