@@ -12,7 +12,7 @@ from absl import logging
 
 import mjcf
 from composer import observation
-from composer.action_validation import ActionValidator
+from composer.action_validation import action_validator
 from composer.hooks import HOOK_NAMES, EnvironmentHooks
 from composer.model_snapshot import ModelSnapshot, snapshots_supported
 from mjcf.physics import compile_mjcf_model
@@ -249,7 +249,7 @@ class Environment(dm_env.Environment):
             self._snapshot = ModelSnapshot(physics.model.ptr) if snapshots_supported() else None
         self._hooks.refresh_entity_hooks()
         self._run_after_compile_hooks()
-        self._check_action = ActionValidator(self._task.action_spec(self._physics_proxy))
+        self._check_action = action_validator(self._task.action_spec(self._physics_proxy))
         self._n_sub_steps = self._task_sub_steps()
         self._observation_updater = self._make_observation_updater()
 

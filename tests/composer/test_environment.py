@@ -279,3 +279,22 @@ def test_default_observables_step_the_physics_in_one_call_per_control_step(monke
     )
     env.step(np.zeros(2))
     assert calls == [10]
+
+
+class OneSpecPerMotor(ReachTask):
+    """Acts as two agents, each driving one of the arm's motors."""
+
+    def action_spec(self, physics):
+        return [specs.BoundedArray((1,), np.float64, -1.0, 1.0) for _ in range(2)]
+
+    def before_step(self, physics, action, random_state):
+        physics.bind(self.arm.actuators).ctrl = [action[0][0], action[1][0]]
+
+
+def test_task_with_a_list_of_action_specs_gets_a_list_of_checked_actions():
+    env = composer.Environment(OneSpecPerMotor())
+    env.reset()
+    env.step([[0.5], [-0.25]])
+    np.testing.assert_allclose(env.physics.data.ctrl, [0.5, -0.25])
+    with pytest.raises(ValueError, match=r"action\[1\]"):
+        env.step([[0.5], [np.nan]])
