@@ -279,8 +279,45 @@ class Observable(metaclass=abc.ABCMeta):
                 raise AttributeError(f"{self!r}: cannot configure unknown option {name!r}")
             setattr(self, name, value)
 
+    def __getitem__(self, key) -> "Observable":
+        """Returns a new, disabled observable whose value is this one's value indexed by `key`.
+
+        The new observable starts with this one's options; afterwards each has its own. A
+        corruptor is applied to the indexed value. (`MJCFFeature` returns an `MJCFFeature`.)
+        """
+        return _Indexed(self, key)
+
     def __repr__(self) -> str:
         return f"<{type(self).__name__} observable>"
+
+
+class _Indexed(Observable):
+    """`source[key]`: the value of another observable, indexed."""
+
+    def __init__(self, source: Observable, key):
+        self._source = source
+        self._key = key
+        super().__init__(
+            source.update_interval,
+            source.buffer_size,
+            source.delay,
+            source.aggregator,
+            source.corruptor,
+        )
+
+    def _callable(self, physics):
+        read, key = self._source._callable(physics), self._key
+        return lambda: np.asarray(read())[key]
+
+    def _live_source(self, physics):
+        source = self._source._live_source(physics)
+        if source is None:
+            return None
+        flat, indices = source
+        return flat, np.asarray(indices[self._key])
+
+    def __repr__(self) -> str:
+        return f"{self._source!r}[{self._key!r}]"
 
 
 class Generic(Observable):

@@ -87,6 +87,23 @@ def test_mujoco_feature_reads_by_compiled_name(scene):
     )
 
 
+def test_indexing_any_observable_gives_an_observable_of_that_item(scene):
+    obs = observable.MujocoFeature("qpos", ["hinge", "slide"], delay=1)
+    item = obs[1]
+    assert item(scene.physics) == pytest.approx(0.25)
+    assert (item.delay, item.enabled) == (1, False)
+    generic = observable.Generic(lambda physics: np.arange(6).reshape(2, 3))[:, 1]
+    np.testing.assert_array_equal(generic(scene.physics), [1, 4])
+
+
+def test_indexed_observable_corrupts_the_indexed_value(scene):
+    obs = observable.Generic(
+        lambda physics: np.array([1.0, 2.0, 3.0]),
+        corruptor=lambda value, random_state: value * 10,
+    )[1:]
+    np.testing.assert_array_equal(obs(scene.physics), [20.0, 30.0])
+
+
 def test_mujoco_feature_name_may_be_a_callable(scene):
     obs = observable.MujocoFeature("qpos", lambda: ["slide"])
     np.testing.assert_allclose(obs(scene.physics), [0.25])
