@@ -171,12 +171,16 @@ class Entity(abc.ABC):
     def set_pose(self, physics, position=None, quaternion=None) -> None:
         """Sets the position and/or orientation of this entity (see `get_pose` for frames).
 
-        A fixed entity's pose is written into the compiled model (its attachment
-        frame's body pos/quat); the quaternion is normalised.
+        A free entity's pose is written into its joint's qpos, a fixed entity's into the
+        compiled model (its attachment frame's body pos/quat). The quaternion is
+        normalised in both cases.
 
         Raises:
           RuntimeError: if the entity is not attached.
         """
+        if quaternion is not None:
+            quaternion = np.asarray(quaternion, dtype=np.float64)
+            quaternion = quaternion / np.linalg.norm(quaternion)
         free_joint = self._free_joint()
         if free_joint is not None:
             qpos = physics.bind(free_joint).qpos
@@ -189,8 +193,7 @@ class Entity(abc.ABC):
         if position is not None:
             frame.pos = position
         if quaternion is not None:
-            quaternion = np.asarray(quaternion, dtype=np.float64)
-            frame.quat = quaternion / np.linalg.norm(quaternion)
+            frame.quat = quaternion
 
     def shift_pose(
         self, physics, position=None, quaternion=None, rotate_velocity: bool = False

@@ -135,6 +135,14 @@ def test_set_pose_of_free_entity_writes_its_joint_qpos():
     np.testing.assert_allclose(physics.bind(box.root_body).xquat, _quat_about_z(0.5))
 
 
+def test_set_pose_of_free_entity_normalises_the_quaternion():
+    arena, box = Floor(), Box()
+    arena.add_free_entity(box)
+    physics = _compiled(arena)
+    box.set_pose(physics, quaternion=[2.0, 0.0, 0.0, 2.0])
+    np.testing.assert_allclose(box.get_pose(physics)[1], [0.5**0.5, 0, 0, 0.5**0.5])
+
+
 def test_get_pose_of_free_entity_reads_its_joint_qpos():
     arena, box = Floor(), Box()
     arena.add_free_entity(box)
