@@ -26,12 +26,23 @@ class Axis:
 
     For rows, ``names`` holds one name per object of the field's family in id order ('' for
     unnamed objects), also when an object owns several rows (``qpos`` of a free joint).
+    ``convert_key_item(key)`` turns a key for this axis (a name, a list of names, or anything
+    NumPy accepts) into the NumPy index it selects, as the field indexer does.
     """
 
-    __slots__ = ("names",)
+    __slots__ = ("names", "_convert")
 
-    def __init__(self, names):
+    def __init__(self, names, convert=None):
         self.names = names
+        self._convert = convert
+
+    def convert_key_item(self, key_item):
+        """Returns the NumPy index ``key_item`` selects on this axis.
+
+        Raises:
+          KeyError: for a name this axis does not have.
+        """
+        return key_item if self._convert is None else self._convert(key_item)
 
     def __repr__(self):
         return f"Axis(names={self.names!r})"
@@ -138,11 +149,18 @@ class FieldIndexer:
     def axes(self) -> Axes:
         """``Axes(row, col)``: row labels (object names) and, for 2-D fields, column labels."""
         array = self.field
-        row = Axis(self._rows.names())
+        row = Axis(self._rows.names(), self._rows.convert)
         if array.ndim < 2:
             return Axes(row)
         columns = field_layout.column_names(self._name, array.shape[1])
-        return Axes(row, Axis(None if columns is None else list(columns)))
+        width = array.shape[1]
+        return Axes(
+            row,
+            Axis(
+                None if columns is None else list(columns),
+                lambda item: self._convert_column(item, width, 1),
+            ),
+        )
 
     def __len__(self):
         return len(self.field)
