@@ -12,12 +12,15 @@ builds `make_vector_env(name, n, **kwargs)`, a `composer.gym.ThreadedVectorEnv`.
 """
 
 import functools
+from typing import TYPE_CHECKING
 
 import gymnasium
 from gymnasium.vector import AutoresetMode
 
 import manipulation
-from composer.gym import GymnasiumEnv, ThreadedVectorEnv
+
+if TYPE_CHECKING:
+    from composer.gym import GymnasiumEnv, ThreadedVectorEnv
 
 __all__ = ["NAMESPACE", "env_id", "make_env", "make_vector_env", "register_all"]
 
@@ -30,7 +33,7 @@ def env_id(environment_name: str) -> str:
     return f"{NAMESPACE}/{environment_name}-v{_VERSION}"
 
 
-def make_env(environment_name: str, **kwargs) -> GymnasiumEnv:
+def make_env(environment_name: str, **kwargs) -> "GymnasiumEnv":
     """Returns `manipulation.load(environment_name)` as a `GymnasiumEnv`.
 
     Args:
@@ -38,6 +41,9 @@ def make_env(environment_name: str, **kwargs) -> GymnasiumEnv:
       **kwargs: passed to `GymnasiumEnv` (`render_mode`, `camera`, `width`, `height`,
         `flatten_observations`).
     """
+    # Imported here: this module may run while composer.gym is being imported.
+    from composer.gym import GymnasiumEnv
+
     return GymnasiumEnv(manipulation.load(environment_name), **kwargs)
 
 
@@ -49,13 +55,15 @@ def make_vector_env(
     autoreset_mode: AutoresetMode | str = AutoresetMode.NEXT_STEP,
     copy: bool = True,
     **kwargs,
-) -> ThreadedVectorEnv:
+) -> "ThreadedVectorEnv":
     """Returns a `ThreadedVectorEnv` of `num_envs` copies of `make_env(environment_name)`.
 
     Args:
       num_threads, autoreset_mode, copy: passed to `ThreadedVectorEnv`.
       **kwargs: passed to each sub-environment's `GymnasiumEnv`.
     """
+    from composer.gym import ThreadedVectorEnv
+
     env_fn = functools.partial(make_env, environment_name, **kwargs)
     return ThreadedVectorEnv(
         [env_fn] * num_envs, num_threads, autoreset_mode=autoreset_mode, copy=copy

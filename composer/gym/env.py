@@ -24,7 +24,7 @@ from composer.gym import spaces as spec_spaces
 
 __all__ = ["GymnasiumEnv"]
 
-_RENDER_MODES = ("human", "rgb_array", "depth_array")
+_RENDER_MODES = ("rgb_array", "depth_array")
 
 
 class GymnasiumEnv(gymnasium.Env):
@@ -33,8 +33,10 @@ class GymnasiumEnv(gymnasium.Env):
     Args:
       env: the environment to wrap; seeding needs its `random_state` (an
         `np.random.RandomState`, as `composer.Environment` has), rendering its `physics`.
-      render_mode: None, 'rgb_array' or 'depth_array'. ('human' is listed in `metadata`
-        for the interactive viewer, which does not exist yet: asking for it raises.)
+      render_mode: None, 'rgb_array' or 'depth_array'. 'human' needs the interactive
+        viewer, which does not exist yet: asking for it raises, and `metadata` does not
+        list it (so `gymnasium.make(id, render_mode='human')` applies Gymnasium's own
+        `HumanRendering` wrapper, which shows 'rgb_array' frames with pygame).
       camera: the camera `render()` draws, by name or index; -1 is the free camera.
       width, height: the size of rendered images in pixels (at most the model's
         off-screen buffer, `<visual><global offwidth offheight>`).
@@ -61,14 +63,14 @@ class GymnasiumEnv(gymnasium.Env):
         height: int = 480,
         flatten_observations: bool = False,
     ):
-        if render_mode is not None and render_mode not in _RENDER_MODES:
-            raise ValueError(
-                f"render_mode: expected None or one of {_RENDER_MODES}, got {render_mode!r}"
-            )
         if render_mode == "human":
             raise NotImplementedError(
                 "render_mode='human' needs the interactive viewer, which this version does "
                 "not have; use render_mode='rgb_array' and show the frames yourself"
+            )
+        if render_mode is not None and render_mode not in _RENDER_MODES:
+            raise ValueError(
+                f"render_mode: expected None or one of {_RENDER_MODES}, got {render_mode!r}"
             )
         if render_mode is not None and not hasattr(env, "physics"):
             raise ValueError(

@@ -4,6 +4,7 @@
 `Box` (the widest range its dtype holds); a mapping of specs a `Dict` in the same order.
 """
 
+import collections
 from collections.abc import Mapping
 from typing import NamedTuple
 
@@ -40,7 +41,9 @@ def space_from_spec(spec) -> spaces.Space:
       TypeError: if `spec` or one of its values is neither an array spec nor a mapping.
     """
     if isinstance(spec, Mapping):
-        return spaces.Dict({name: space_from_spec(value) for name, value in spec.items()})
+        return spaces.Dict(
+            collections.OrderedDict((name, space_from_spec(value)) for name, value in spec.items())
+        )
     return box_from_spec(spec)
 
 
@@ -83,7 +86,7 @@ def flat_space(observation_spec: Mapping, layout: FeatureLayout) -> spaces.Space
     """
     images = {name: box_from_spec(observation_spec[name]) for name in layout.images}
     if not layout.names:
-        return spaces.Dict(images)
+        return spaces.Dict(collections.OrderedDict(images))
     boxes = [box_from_spec(observation_spec[name]) for name in layout.names]
     dtype = np.result_type(*(box.dtype for box in boxes))
     features = spaces.Box(
@@ -93,4 +96,4 @@ def flat_space(observation_spec: Mapping, layout: FeatureLayout) -> spaces.Space
     )
     if not images:
         return features
-    return spaces.Dict({"features": features, **images})
+    return spaces.Dict(collections.OrderedDict(features=features, **images))
