@@ -20,8 +20,13 @@ def _obs(observations):
     return observations[:, 0].tolist()
 
 
-def _worker_threads():
-    return [t for t in threading.enumerate() if t.name.startswith("ThreadedVectorEnv")]
+def _worker_threads(ignore=()):
+    """The live worker threads, less those in `ignore` (left by other tests)."""
+    return [
+        t
+        for t in threading.enumerate()
+        if t.name.startswith("ThreadedVectorEnv") and t not in ignore
+    ]
 
 
 def test_is_a_gymnasium_vector_env_with_batched_spaces():
@@ -146,6 +151,7 @@ def test_observations_are_copies_unless_copy_is_false():
 
 
 def test_an_exception_in_a_sub_env_names_its_index_and_does_not_hang():
+    earlier = _worker_threads()
     fns = _counters([5, 5, 5])
     fns[2] = lambda: CounterEnv(5, fail_at_step=2)
     envs = ThreadedVectorEnv(fns, num_threads=2)
@@ -156,28 +162,31 @@ def test_an_exception_in_a_sub_env_names_its_index_and_does_not_hang():
     assert info.value.index == 2
     assert isinstance(info.value.__cause__, ValueError)
     envs.close()
-    assert _worker_threads() == []
+    assert _worker_threads(earlier) == []
 
 
 def test_an_exception_while_building_a_sub_env_names_its_index_and_stops_the_threads():
+    earlier = _worker_threads()
+
     def broken():
         raise OSError("no such model")
 
     with pytest.raises(SubEnvironmentError, match="sub-environment 1 raised OSError"):
         ThreadedVectorEnv([_counters([2])[0], broken], num_threads=2)
-    assert _worker_threads() == []
+    assert _worker_threads(earlier) == []
 
 
 def test_close_closes_the_sub_envs_and_joins_the_threads():
+    earlier = _worker_threads()
     before = threading.active_count()
     envs = ThreadedVectorEnv(
         [lambda: GymnasiumEnv(manipulation.load("reach_site_features"))] * 2, num_threads=2
     )
-    assert len(_worker_threads()) == 2
+    assert len(_worker_threads(earlier)) == 2
     sub_envs = envs.envs
     envs.close()
     assert envs.closed
-    assert _worker_threads() == []
+    assert _worker_threads(earlier) == []
     assert threading.active_count() == before
     assert all(env.dm_env.physics is None for env in sub_envs)
     with pytest.raises(RuntimeError, match="closed"):
@@ -185,10 +194,11 @@ def test_close_closes_the_sub_envs_and_joins_the_threads():
 
 
 def test_sub_envs_with_different_spaces_are_rejected():
+    earlier = _worker_threads()
     fns = [lambda: CounterEnv(2), lambda: GymnasiumEnv(manipulation.load("reach_site_features"))]
     with pytest.raises(ValueError, match="sub-environment 1: observation space"):
         ThreadedVectorEnv(fns, num_threads=1)
-    assert _worker_threads() == []
+    assert _worker_threads(earlier) == []
 
 
 def test_call_get_attr_set_attr_and_render_reach_every_sub_env():
