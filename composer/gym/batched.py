@@ -21,7 +21,6 @@ episode ended (terminated or truncated) at step t:
 """
 
 from collections.abc import Callable, Sequence
-from copy import deepcopy
 from typing import Any, NamedTuple
 
 import gymnasium
@@ -106,6 +105,14 @@ def _close_sub_env(env: gymnasium.Env) -> None:
     env.close()
 
 
+def _copy_batch(batch):
+    if isinstance(batch, dict):
+        return type(batch)((key, _copy_batch(part)) for key, part in batch.items())
+    if isinstance(batch, tuple):
+        return tuple(_copy_batch(part) for part in batch)
+    return batch.copy()
+
+
 def _write_row(batch, index: int, value) -> None:
     if isinstance(batch, dict):
         for key, part in batch.items():
@@ -163,9 +170,16 @@ class BatchedVectorEnv(VectorEnv):
         self._truncations = np.zeros(num_envs, dtype=np.bool_)
         self._episode_over = np.zeros(num_envs, dtype=np.bool_)
 
-    def _map(self, function: Callable[..., Any], arguments: dict[int, tuple]) -> dict[int, Any]:
+    def _map(
+        self,
+        function: Callable[..., Any],
+        arguments: dict[int, tuple],
+        store: Callable[[int, Any], None] | None = None,
+    ) -> dict[int, Any]:
         """Returns {i: function(sub_env_i, *arguments[i])} for each i in `arguments`.
 
+        With `store`, also calls `store(i, result)` once per result before returning,
+        from whichever thread is convenient (calls for different i touch different data).
         Every listed sub-environment runs its call even when another raises.
 
         Raises:
@@ -194,8 +208,10 @@ class BatchedVectorEnv(VectorEnv):
         mask = self._reset_mask(options.pop("reset_mask", None))
         sub_options = options or None
         indices = np.flatnonzero(mask)
-        outcomes = self._map(reset_sub_env, {i: (seeds[i], sub_options) for i in indices})
-        return self._collect(outcomes), self._batched_infos(outcomes)
+        outcomes = self._map(
+            reset_sub_env, {i: (seeds[i], sub_options) for i in indices}, self._store
+        )
+        return self._observations_out(), self._batched_infos(outcomes)
 
     def step(self, actions) -> tuple[Any, np.ndarray, np.ndarray, np.ndarray, dict[str, Any]]:
         """Steps every sub-environment with its row of `actions`, autoresetting as set.
@@ -222,10 +238,10 @@ class BatchedVectorEnv(VectorEnv):
                 i: (action, mode, bool(episode_over[i]))
                 for i, action in enumerate(iterate(self.action_space, actions))
             },
+            self._store,
         )
-        observations = self._collect(outcomes)
         return (
-            observations,
+            self._observations_out(),
             self._rewards.copy(),
             self._terminations.copy(),
             self._truncations.copy(),
@@ -297,18 +313,19 @@ class BatchedVectorEnv(VectorEnv):
             )
         return mask
 
-    def _collect(self, outcomes: dict[int, SubEnvOutcome]):
-        observations = self._observations
-        for i, outcome in outcomes.items():
-            _write_row(observations, i, outcome.observation)
-            self._rewards[i] = outcome.reward
-            self._terminations[i] = outcome.terminated
-            self._truncations[i] = outcome.truncated
-            # A SAME_STEP autoreset has already started the next episode.
-            self._episode_over[i] = (
-                outcome.terminated or outcome.truncated
-            ) and outcome.final_info is None
-        return deepcopy(observations) if self.copy else observations
+    def _store(self, index: int, outcome: SubEnvOutcome) -> None:
+        """Writes one sub-environment's outcome into row `index` of the batched arrays."""
+        _write_row(self._observations, index, outcome.observation)
+        self._rewards[index] = outcome.reward
+        self._terminations[index] = outcome.terminated
+        self._truncations[index] = outcome.truncated
+        # A SAME_STEP autoreset has already started the next episode.
+        self._episode_over[index] = (
+            outcome.terminated or outcome.truncated
+        ) and outcome.final_info is None
+
+    def _observations_out(self):
+        return _copy_batch(self._observations) if self.copy else self._observations
 
     def _batched_infos(self, outcomes: dict[int, SubEnvOutcome]) -> dict[str, Any]:
         infos: dict[str, Any] = {}

@@ -109,9 +109,23 @@ class ThreadedVectorEnv(BatchedVectorEnv):
         """The sub-environments (use them only between calls on this vector env)."""
         return tuple(self._envs)
 
-    def _map(self, function: Callable[..., Any], arguments: dict[int, tuple]) -> dict[int, Any]:
+    def _map(
+        self,
+        function: Callable[..., Any],
+        arguments: dict[int, tuple],
+        store: Callable[[int, Any], None] | None = None,
+    ) -> dict[int, Any]:
         envs = self._envs
-        return self._run_on_threads(lambda i: function(envs[i], *arguments[i]), arguments)
+        if store is None:
+            return self._run_on_threads(lambda i: function(envs[i], *arguments[i]), arguments)
+
+        def run_and_store(i: int) -> Any:
+            # Stored on the worker, while other workers are still stepping.
+            result = function(envs[i], *arguments[i])
+            store(i, result)
+            return result
+
+        return self._run_on_threads(run_and_store, arguments)
 
     def _run_on_threads(self, task: Callable[[int], Any], indices: Iterable[int]) -> dict[int, Any]:
         """Runs `task(i)` on sub-environment i's thread for each i; returns {i: result}.
