@@ -6,6 +6,7 @@ lives on one thread for its whole life (it is built, stepped, rendered and close
 there), which an OpenGL context bound to a thread needs.
 """
 
+import numbers
 import os
 import queue
 import threading
@@ -34,6 +35,21 @@ class _Worker:
     def _run(self) -> None:
         while (job := self._jobs.get()) is not None:
             job()
+
+
+def _check_spaces_match(envs: Sequence[gymnasium.Env]) -> None:
+    first = envs[0]
+    for i, env in enumerate(envs):
+        if env.observation_space != first.observation_space:
+            raise ValueError(
+                f"sub-environment {i}: observation space {env.observation_space} differs "
+                f"from sub-environment 0's {first.observation_space}"
+            )
+        if env.action_space != first.action_space:
+            raise ValueError(
+                f"sub-environment {i}: action space {env.action_space} differs from "
+                f"sub-environment 0's {first.action_space}"
+            )
 
 
 class ThreadedVectorEnv(BatchedVectorEnv):
@@ -70,9 +86,13 @@ class ThreadedVectorEnv(BatchedVectorEnv):
             raise ValueError("env_fns: expected at least one environment factory, got none")
         if num_threads is None:
             num_threads = os.cpu_count() or 1
-        if isinstance(num_threads, bool) or not isinstance(num_threads, int) or num_threads < 1:
+        if (
+            isinstance(num_threads, bool)
+            or not isinstance(num_threads, numbers.Integral)
+            or num_threads < 1
+        ):
             raise ValueError(f"num_threads: expected an integer >= 1 or None, got {num_threads!r}")
-        self.num_threads = min(num_threads, len(env_fns))
+        self.num_threads = min(int(num_threads), len(env_fns))
         self._workers = [_Worker(f"ThreadedVectorEnv-{k}") for k in range(self.num_threads)]
         try:
             built = self._run_on_threads(lambda i: env_fns[i](), range(len(env_fns)))
@@ -81,19 +101,12 @@ class ThreadedVectorEnv(BatchedVectorEnv):
             raise
         self._envs = [built[i] for i in range(len(env_fns))]
         first = self._envs[0]
-        for i, env in enumerate(self._envs):
-            if env.observation_space != first.observation_space:
-                self._stop_workers()
-                raise ValueError(
-                    f"sub-environment {i}: observation space {env.observation_space} differs "
-                    f"from sub-environment 0's {first.observation_space}"
-                )
-            if env.action_space != first.action_space:
-                self._stop_workers()
-                raise ValueError(
-                    f"sub-environment {i}: action space {env.action_space} differs from "
-                    f"sub-environment 0's {first.action_space}"
-                )
+        try:
+            _check_spaces_match(self._envs)
+        except ValueError:
+            self._run_on_threads(lambda i: self._envs[i].close(), range(len(env_fns)))
+            self._stop_workers()
+            raise
         super().__init__(
             first.observation_space,
             first.action_space,

@@ -221,3 +221,21 @@ def test_call_get_attr_set_attr_and_render_reach_every_sub_env():
     assert envs.get_attr("marker") == (1, 2)
     assert envs.call("render")[0].shape == (24, 32, 3)
     envs.close()
+
+
+def test_invalid_thread_count_is_rejected_naming_the_argument():
+    with pytest.raises(ValueError, match="num_threads: expected an integer >= 1 or None, got 0"):
+        ThreadedVectorEnv(_counters([2]), num_threads=0)
+
+
+def test_vision_sub_envs_render_their_cameras_on_worker_threads():
+    envs = ThreadedVectorEnv(
+        [lambda: GymnasiumEnv(manipulation.load("reach_site_vision"))] * 2, num_threads=2
+    )
+    observations, _ = envs.reset(seed=0)
+    observations, *_ = envs.step(np.zeros((2, 9)))
+    images = observations["front_close"]
+    assert images.shape == (2, 1, 84, 84, 3)
+    assert images.dtype == np.uint8
+    assert images.std() > 0  # a picture of the scene, not a blank buffer
+    envs.close()
