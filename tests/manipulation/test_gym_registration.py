@@ -104,3 +104,23 @@ def test_plain_id_works_once_manipulation_is_imported_before_gymnasium():
         """
     )
     assert out == "{'environment_name': 'reach_site_vision'}"
+
+
+def test_threaded_vector_env_matches_gymnasiums_sync_vector_env_step_for_step():
+    kinds = ("vector_entry_point", "sync")
+    vector_envs = [
+        gymnasium.make_vec("composer/lift_brick_features-v0", num_envs=2, vectorization_mode=m)
+        for m in kinds
+    ]
+    actions = np.random.RandomState(0).uniform(-0.5, 0.5, size=(3, 2, 9))
+    results = []
+    for envs in vector_envs:
+        observations, _ = envs.reset(seed=4)
+        trace = [observations["duplo2x4/position"].copy()]
+        for action in actions:
+            observations, rewards, *_ = envs.step(action)
+            trace += [observations["jaco_arm/joints_pos"].copy(), rewards]
+        results.append(trace)
+        envs.close()
+    for ours, sync in zip(*results):
+        np.testing.assert_array_equal(ours, sync)
