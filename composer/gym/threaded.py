@@ -6,6 +6,7 @@ lives on one thread for its whole life (it is built, stepped, rendered and close
 there), which an OpenGL context bound to a thread needs.
 """
 
+import itertools
 import numbers
 import os
 import queue
@@ -149,12 +150,18 @@ class ThreadedVectorEnv(BatchedVectorEnv):
         """
         if not self._workers:
             raise RuntimeError("this ThreadedVectorEnv is closed")
-        done: queue.SimpleQueue = queue.SimpleQueue()
         results: dict[int, Any] = {}
         errors: dict[int, BaseException] = {}
         by_worker: dict[int, list[int]] = {}
         for i in indices:
             by_worker.setdefault(i % self.num_threads, []).append(i)
+        if not by_worker:
+            return results
+        # The last worker to finish wakes the caller, once: each wake-up costs a thread
+        # switch. `next` on an itertools.count is atomic under the GIL.
+        done: queue.SimpleQueue = queue.SimpleQueue()
+        finished = itertools.count(1)
+        last = len(by_worker)
 
         def job(assigned: list[int]) -> None:
             try:
@@ -164,12 +171,12 @@ class ThreadedVectorEnv(BatchedVectorEnv):
                     except BaseException as error:  # re-raised in the caller
                         errors[i] = error
             finally:
-                done.put(None)
+                if next(finished) == last:
+                    done.put(None)
 
         for worker_index, assigned in by_worker.items():
             self._workers[worker_index].submit(lambda assigned=assigned: job(assigned))
-        for _ in by_worker:
-            done.get()
+        done.get()
         if errors:
             index = min(errors)
             raise SubEnvironmentError(index, errors[index]) from errors[index]
