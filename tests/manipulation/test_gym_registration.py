@@ -82,7 +82,13 @@ def test_importing_the_packages_does_not_import_gymnasium():
 
 @pytest.mark.parametrize(
     "imports",
-    ["import manipulation, gymnasium", "import gymnasium, manipulation", "import gymnasium"],
+    [
+        "import manipulation, gymnasium",
+        "import gymnasium, manipulation",
+        "import gymnasium",
+        # composer.gym imports gymnasium, whose import then registers the tasks.
+        "import manipulation; import composer.gym; import gymnasium",
+    ],
 )
 def test_module_syntax_id_works_whatever_was_imported_first(imports):
     out = _run(
