@@ -207,7 +207,7 @@ class BatchedVectorEnv(VectorEnv):
         options = dict(options or {})
         mask = self._reset_mask(options.pop("reset_mask", None))
         sub_options = options or None
-        indices = np.flatnonzero(mask)
+        indices = np.flatnonzero(mask).tolist()
         outcomes = self._map(
             reset_sub_env, {i: (seeds[i], sub_options) for i in indices}, self._store
         )
