@@ -22,7 +22,8 @@ Rows:
     threaded / async (target > 1 at every N).
 
 Throughputs are medians over `--repeats` trials of `--steps` vector steps each, taken
-in turn so that load from other processes spreads over all rows. On a machine shared
+in turn so that load from other processes spreads over all rows; ratios are medians of
+the ratios within each trial. On a machine shared
 with other work the ratios are noisy.
 
 Usage: python benchmarks/vector_env.py [--steps N] [--repeats N] [--sizes 1,2,4,8]
@@ -225,6 +226,11 @@ class Throughput:
     def median(self, name: str) -> float:
         return statistics.median(self.rates[name])
 
+    def ratio(self, numerator: str, denominator: str) -> float:
+        """The median over trials of the ratio of two rates measured in the same trial."""
+        pairs = zip(self.rates[numerator], self.rates[denominator])
+        return statistics.median(a / b for a, b in pairs)
+
     def close(self) -> None:
         self.single.close()
         self.threaded.close()
@@ -281,11 +287,12 @@ def main() -> None:
     print("|" + "---|" * len(header))
     for bench in benches:
         loop, threaded, asynchronous = (bench.median(n) for n in ("loop", "threaded", "async"))
+        speedup = bench.ratio("threaded", "loop")
         ceiling = ceilings[min(bench.num_envs, cores)]
         print(
             f"| {bench.num_envs} | {loop:.0f} | {threaded:.0f} | {asynchronous:.0f} | "
-            f"{threaded / loop:.2f}x | {threaded / loop / ceiling:.0%} | "
-            f"{asynchronous / loop:.2f}x | {threaded / asynchronous:.2f}x |"
+            f"{speedup:.2f}x | {speedup / ceiling:.0%} | "
+            f"{bench.ratio('async', 'loop'):.2f}x | {bench.ratio('threaded', 'async'):.2f}x |"
         )
         bench.close()
     print(
