@@ -34,9 +34,9 @@ class GymnasiumEnv(gymnasium.Env):
       env: the environment to wrap; seeding needs its `random_state` (an
         `np.random.RandomState`, as `composer.Environment` has), rendering its `physics`.
       render_mode: None, 'rgb_array' or 'depth_array'. 'human' needs the interactive
-        viewer, which does not exist yet: asking for it raises, and `metadata` does not
-        list it (so `gymnasium.make(id, render_mode='human')` applies Gymnasium's own
-        `HumanRendering` wrapper, which shows 'rgb_array' frames with pygame).
+        viewer, which does not exist yet: asking for it raises (also through
+        `gymnasium.make`), and `metadata` does not list it, since Gymnasium's env checker
+        tries every listed mode.
       camera: the camera `render()` draws, by name or index; -1 is the free camera.
       width, height: the size of rendered images in pixels (at most the model's
         off-screen buffer, `<visual><global offwidth offheight>`).

@@ -130,3 +130,8 @@ def test_threaded_vector_env_matches_gymnasiums_sync_vector_env_step_for_step():
         envs.close()
     for ours, sync in zip(*results):
         np.testing.assert_array_equal(ours, sync)
+
+
+def test_make_with_human_render_mode_says_the_viewer_is_missing():
+    with pytest.raises(NotImplementedError, match="interactive viewer"):
+        gymnasium.make("composer/reach_site_features-v0", render_mode="human")
