@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+from mjcf.attribute_array import frozen
 from mjcf.element import Element, RootElement
 
 
@@ -19,7 +20,7 @@ def copy_model(source: RootElement) -> RootElement:
     def copy_root(model: RootElement) -> RootElement:
         scope = model._namescope
         new = RootElement(model_dir=scope.model_dir, assets=scope.assets)
-        new._attributes = dict(model._attributes)
+        new._attributes = {k: frozen(v) for k, v in model._attributes.items()}
         new._texts = dict(model._texts)
         new._namescope._unnamed_counts = dict(scope._unnamed_counts)
         memo[id(model)] = new
@@ -36,7 +37,7 @@ def copy_model(source: RootElement) -> RootElement:
                 root._frames.append(clone)
             else:
                 clone = Element._create(child._spec, new, root)
-            clone._attributes = dict(child._attributes)
+            clone._attributes = {k: frozen(v) for k, v in child._attributes.items()}
             clone._texts = dict(child._texts)
             clone._auto_id = child._auto_id
             memo[id(child)] = clone

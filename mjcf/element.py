@@ -5,7 +5,9 @@ from __future__ import annotations
 import difflib
 import os
 
-from mjcf import attribute_types, constants, element_list, schema, scoped_lookup
+import numpy as np
+
+from mjcf import attribute_array, attribute_types, constants, element_list, schema, scoped_lookup
 from mjcf.asset import Asset
 from mjcf.namescope import UNNAMED_MODEL, NameScope
 
@@ -197,7 +199,10 @@ class Element:
         spec = self._spec
         attribute = spec.python_attributes.get(name)
         if attribute is not None:
-            return self._attributes.get(attribute.name)
+            value = self._attributes.get(attribute.name)
+            if isinstance(value, np.ndarray):
+                return self._writable_array(attribute.name, value)
+            return value
         child_spec = self._allowed_children().get(name)
         if child_spec is not None:
             if child_spec.repeated:
@@ -232,7 +237,32 @@ class Element:
     def get_attributes(self) -> dict:
         """All set attributes, keyed by Python name (`dclass` for `class`)."""
         attributes = self._spec.attributes
-        return {attributes[k].python_name: v for k, v in self._attributes.items()}
+        return {
+            attributes[k].python_name: (
+                self._writable_array(k, v) if isinstance(v, np.ndarray) else v
+            )
+            for k, v in list(self._attributes.items())
+        }
+
+    def _writable_array(self, xml_name: str, value: np.ndarray) -> np.ndarray:
+        """The array stored for `xml_name`, made writable in place (see `attribute_array`)."""
+        if getattr(value, "_owner", None) is self:
+            return value
+        if self._removed:
+            return value
+        value = attribute_array.owned(value, self, xml_name)
+        self._attributes[xml_name] = value
+        return value
+
+    def _array_written(self, xml_name: str, array: np.ndarray) -> None:
+        """Called after `array`, this element's value of `xml_name`, was written in place."""
+        if self._attributes.get(xml_name) is not array:
+            return
+        spec = self._spec.attributes[xml_name]
+        if xml_name in self._texts:
+            self._texts[xml_name] = attribute_types.xml_text(xml_name, spec.type, array)
+        _set_slot(self, "_xml_cache", None)
+        self._changed()
 
     def set_attributes(self, **attributes) -> None:
         """Sets several attributes at once; a value of None unsets that attribute."""
