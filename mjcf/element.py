@@ -15,6 +15,12 @@ _SEP = constants.PREFIX_SEPARATOR
 # Sets a private slot without going through Element.__setattr__ (which handles XML attributes).
 _set_slot = object.__setattr__
 _ESCAPED_SEP = constants.PREFIX_SEPARATOR_ESCAPE + constants.PREFIX_SEPARATOR
+# Single children that exist only once added (reading them gives None until then), as in
+# dm_control; every other single child exists from the start (created on first access here).
+_ON_DEMAND = frozenset(("inertial", "freejoint"))
+# The world body's identifier in the compiled model (an attached model's world body is its
+# attachment frame, named by the model's scope prefix).
+_WORLD = "world"
 
 # Which compiler attribute names the directory of each file-bearing element's files.
 _ASSET_DIRECTORY = {
@@ -145,13 +151,19 @@ class Element:
         return self.prefixed_identifier(self._root.root_model)
 
     def prefixed_identifier(self, prefix_root=None) -> str | None:
-        """This element's identifier as seen from model `prefix_root` (None: its own model)."""
-        if self._spec.identifier is None:
+        """This element's identifier as seen from model `prefix_root` (None: its own model).
+
+        The world body is 'world' in its own model and the scope prefix ('arm/', naming the
+        attachment frame) when seen from a model it is attached below.
+        """
+        if self._spec.identifier is None and self._spec.name != constants.WORLDBODY:
             return None
         return self._scoped_name(self._root._namescope.full_prefix(prefix_root))
 
     def _scoped_name(self, prefix: str) -> str:
         """This element's identifier when its model's scope prefix is `prefix`."""
+        if self._spec.name == constants.WORLDBODY:
+            return prefix or _WORLD
         if self._spec.identifier == "class":
             if self._parent is self._root:
                 return prefix or _SEP
@@ -196,6 +208,10 @@ class Element:
     def __getattr__(self, name: str):
         if name.startswith("_"):
             raise AttributeError(name)
+        if name in _CLASS_ATTRIBUTES:
+            # A property of the class raised AttributeError: let that error through instead
+            # of reporting an unknown attribute.
+            return object.__getattribute__(self, name)
         spec = self._spec
         attribute = spec.python_attributes.get(name)
         if attribute is not None:
@@ -205,9 +221,7 @@ class Element:
             return value
         child_spec = self._allowed_children().get(name)
         if child_spec is not None:
-            if child_spec.repeated:
-                return element_list.ElementList(self, name)
-            return self._singleton(child_spec)
+            return self._child_view(child_spec)
         raise _UnknownAttributeError(self, name)
 
     def __setattr__(self, name: str, value) -> None:
@@ -218,8 +232,20 @@ class Element:
         self._changed()
 
     def __delattr__(self, name: str) -> None:
+        """Unsets an attribute, or removes a single child (`del root.option`)."""
         if name.startswith("_"):
             object.__delattr__(self, name)
+            return
+        child_spec = self._allowed_children().get(name)
+        if child_spec is not None and name not in self._spec.python_attributes:
+            if child_spec.repeated:
+                raise AttributeError(
+                    f"{self._describe()}.{name} lists several children and cannot be "
+                    f"deleted; use {name}.clear() to remove them all"
+                )
+            child = self._singleton_if_present(name)
+            if child is not None:
+                child.remove()
             return
         self._set_attribute(name, None)
         self._changed()
@@ -392,6 +418,15 @@ class Element:
                 return child
         return None
 
+    def _child_view(self, child_spec: schema.ElementSpec):
+        """The list of children with a repeated tag, or the single child (None for an
+        on-demand child not yet added)."""
+        if child_spec.repeated:
+            return element_list.ElementList(self, child_spec.name)
+        if child_spec.name in _ON_DEMAND:
+            return self._singleton_if_present(child_spec.name)
+        return self._singleton(child_spec)
+
     def _singleton(self, child_spec: schema.ElementSpec) -> Element:
         existing = self._singleton_if_present(child_spec.name)
         if existing is not None:
@@ -416,15 +451,13 @@ class Element:
                 f"{_close_matches(element_name, self._allowed_children())}; allowed: "
                 f"{', '.join(sorted(self._allowed_children()))}"
             )
-        if not child_spec.repeated:
-            existing = self._singleton_if_present(element_name)
-            if existing is not None:
-                if existing._attributes or existing._children:
-                    raise ValueError(
-                        f"{self._describe()} already has a <{element_name}> child; access it "
-                        f"as .{element_name}"
-                    )
-                self._children.remove(existing)
+        if not child_spec.repeated and (
+            element_name not in _ON_DEMAND or self._singleton_if_present(element_name)
+        ):
+            raise ValueError(
+                f"{self._describe()}: a <{element_name}> child already exists (there can be "
+                f"only one); access it as .{element_name}"
+            )
         child = Element._create(child_spec, None, self._root)
         for name, value in attributes.items():
             child._set_attribute(name, value)
@@ -470,14 +503,72 @@ class Element:
             stack.extend(reversed(element._children))
 
     def remove(self, affect_attachments: bool = False) -> None:
-        """Removes this element (and its subtree) from the model."""
-        del affect_attachments
+        """Removes this element (and its subtree) from the model.
+
+        A single child that always exists (`root.option`, `root.visual.quality`) is emptied
+        instead: its attributes are unset and its children removed. The global sections of
+        a model (`option`, `contact`, ...) stand for those of every model attached below it
+        as well, so emptying one of them needs `affect_attachments=True`, which empties the
+        same section of the attached models too.
+
+        Raises:
+          ValueError: the element is not part of a model, or it is a global section of a
+            model with attachments and `affect_attachments` is False.
+        """
         parent = self._parent
         if parent is None or self._removed:
             raise ValueError(f"{self._describe()} is not part of a model, so cannot be removed")
+        if self._spec.repeated or self._spec.name in _ON_DEMAND:
+            self._detach()
+            return
+        path = self._section_path()
+        if path is not None and self._root._frames:
+            if not affect_attachments:
+                raise ValueError(
+                    f"{self._describe()} of model {self._root._namescope.name!r} also "
+                    "stands for that of the models attached to it; use "
+                    "remove(affect_attachments=True) to empty it in all of them"
+                )
+            for frame in self._root._frames:
+                counterpart = frame._attached
+                for tag in path:
+                    counterpart = counterpart._singleton_if_present(tag)
+                    if counterpart is None:
+                        break
+                if counterpart is not None:
+                    counterpart.remove(affect_attachments=True)
+        self._empty()
+
+    def _section_path(self) -> list[str] | None:
+        """Tags from the root down to this element when all of them are single children
+        (a global section or a part of one), else None."""
+        path = []
+        element = self
+        while element._parent is not None:
+            if element._spec.repeated:
+                return None
+            path.append(element._spec.name)
+            element = element._parent
+        path.reverse()
+        return path
+
+    def _empty(self) -> None:
+        """Unsets every attribute and removes every child, keeping this element."""
+        for name in list(self._attributes):
+            self._set_attribute(self._spec.attributes[name].python_name, None)
+        for child in list(self._children):
+            if child._spec.repeated or child._spec.name in _ON_DEMAND:
+                child._detach()
+            else:
+                child._empty()
+        self._changed()
+
+    def _detach(self) -> None:
+        """Takes this element and its subtree out of the model."""
+        parent = self._parent
         for element in self._iter_own_tree():
             entry = element._identifier_entry()
-            if entry is not None and element._root._namescope.get(*entry) is element:
+            if entry is not None and element._root._namescope.find(*entry) is element:
                 element._root._namescope.remove(*entry)
             if element._auto_id is not None:
                 element._root._namescope.remove_unnamed(element._spec.namespace, element._auto_id)
@@ -500,13 +591,61 @@ class Element:
                 f"{self._describe()} has no child tag {element_name!r}"
                 f"{_close_matches(element_name, self._allowed_children())}"
             )
-        if child_spec.repeated:
-            return element_list.ElementList(self, element_name)
-        return self._singleton(child_spec)
+        return self._child_view(child_spec)
 
     def all_children(self) -> list[Element]:
         """All children in order (attachment frames included, attached models' elements not)."""
         return list(self._children)
+
+    # ------------------------------------------------------------------------ sameness
+
+    def is_same_as(self, other) -> bool:
+        """Whether `other` describes the same thing: the same kind of element with equal
+        attributes and, recursively, equivalent children.
+
+        Children are compared tag by tag in order (a body's geoms against the other's geoms,
+        its sites against its sites), except in a tendon, whose path is its children in
+        order. A single child that was never set up equals an empty one. References are
+        compared by the identifier they name; a model's own name does not count. Meant for
+        tests: equivalent models may still order `ctrl` differently when compiled.
+        """
+        if not isinstance(other, Element) or other._spec is not self._spec:
+            return False
+        if not self._same_attributes(other):
+            return False
+        attached = getattr(self, "_attached", None)
+        if attached is not None and not attached.is_same_as(getattr(other, "_attached", None)):
+            return False
+        mine = [c for c in self._children if _is_set(c)]
+        theirs = [c for c in other._children if _is_set(c)]
+        parent = self._parent
+        if parent is not None and parent._spec.name == constants.TENDON:
+            return len(mine) == len(theirs) and all(
+                a.is_same_as(b) for a, b in zip(mine, theirs, strict=True)
+            )
+        tags = dict.fromkeys(c._spec.name for c in mine + theirs)
+        for tag in tags:
+            group = [c for c in mine if c._spec.name == tag]
+            other_group = [c for c in theirs if c._spec.name == tag]
+            if len(group) != len(other_group):
+                return False
+            if not all(a.is_same_as(b) for a, b in zip(group, other_group, strict=True)):
+                return False
+        return True
+
+    def _same_attributes(self, other: Element) -> bool:
+        names = set(self._attributes) | set(other._attributes)
+        if isinstance(self, RootElement):
+            names.discard("model")
+        for name in names:
+            mine = _comparable(self._attributes.get(name))
+            theirs = _comparable(other._attributes.get(name))
+            if isinstance(mine, np.ndarray) or isinstance(theirs, np.ndarray):
+                if mine is None or theirs is None or not np.array_equal(mine, theirs):
+                    return False
+            elif mine != theirs:
+                return False
+        return True
 
     # ---------------------------------------------------------------------------- search
 
@@ -516,8 +655,7 @@ class Element:
         `identifier` may be scoped into attached models, e.g. 'arm/hand/pinch_site'.
         Returns None when there is no such element.
         """
-        if namespace == "keyframe":
-            namespace = "key"
+        namespace = _checked_namespace(namespace)
         found = scoped_lookup.lookup(self._root, namespace, identifier)
         if found is None or self is self._root:
             return found
@@ -552,8 +690,7 @@ class Element:
         separately). Attachment frames count as bodies and are found under the
         'attachment_frame' namespace.
         """
-        if namespace == "keyframe":
-            namespace = "key"
+        namespace = _checked_namespace(namespace)
         found = []
         if immediate_children_only:
             for child in self._children:
@@ -654,6 +791,28 @@ class Element:
 
     def __deepcopy__(self, memo):
         return self.__copy__()
+
+
+def _is_set(element: Element) -> bool:
+    """Whether `element` says anything: single children that were never set up do not."""
+    if element._spec.repeated or element._spec.name in _ON_DEMAND or element._attributes:
+        return True
+    return any(_is_set(child) for child in element._children)
+
+
+def _comparable(value):
+    """An attribute value as `is_same_as` compares it: references by the name they give."""
+    if isinstance(value, Element):
+        return value.full_identifier
+    return value
+
+
+def _checked_namespace(namespace: str) -> str:
+    """`namespace` ('keyframe' spelled 'key'); a ValueError if no element has it."""
+    if namespace not in schema.namespaces():
+        suggestion = _close_matches(namespace, schema.namespaces())
+        raise ValueError(f"{namespace!r} is not a valid namespace{suggestion}")
+    return "key" if namespace == "keyframe" else namespace
 
 
 def _frame_of(element):
@@ -813,6 +972,14 @@ class RootElement(Element):
     def remove(self, affect_attachments: bool = False) -> None:
         raise ValueError("the <mujoco> root element cannot be removed; use detach()")
 
+    def resolve_references(self) -> None:
+        """Replaces identifier strings in reference attributes (an actuator's `joint`, a
+        geom's `material`) by the elements they name, where this model has such an element.
+        """
+        from mjcf import parser
+
+        parser.resolve_reference_strings(self)
+
     def __copy__(self):
         return self.__deepcopy__({})
 
@@ -820,3 +987,12 @@ class RootElement(Element):
         from mjcf import copier
 
         return copier.copy_model(self)
+
+
+# Names of the properties of the element classes (see `Element.__getattr__`).
+_CLASS_ATTRIBUTES = frozenset(
+    name
+    for cls in (Element, RootElement)
+    for name, value in vars(cls).items()
+    if isinstance(value, property)
+)

@@ -124,7 +124,7 @@ def _build(document, escape_separators, model_dir, resolve_references, assets) -
     if model_name is not None:
         root.model = model_name
     if resolve_references:
-        _resolve_references(root)
+        resolve_reference_strings(root)
     root._modification_count = 0
     return root
 
@@ -186,7 +186,7 @@ def _checked_identifier(element: Element, name: str, value: str) -> str:
     return value
 
 
-def _resolve_references(root: RootElement) -> None:
+def resolve_reference_strings(root: RootElement) -> None:
     """Replaces identifier strings in reference attributes by the elements they name."""
     for element in root._iter_own_tree():
         attributes = element._spec.attributes

@@ -11,6 +11,7 @@ if TYPE_CHECKING:
     from mjcf.element import Element, RootElement
 
 _SEP = constants.PREFIX_SEPARATOR
+_WORLD = "world"
 
 # Asset kinds that MuJoCo lets you reference by file name when they have no name.
 _NAMED_BY_FILE = ("mesh", "texture", "hfield", "skin")
@@ -53,7 +54,9 @@ def lookup(root: RootElement, namespace: str, identifier: str) -> Element | None
         return model._frame if model is not None else None
     if namespace == constants.DEFAULT and identifier == "main":
         return root.default
-    found = root._namescope.get(namespace, identifier)
+    found = root._namescope.find(namespace, identifier)
+    if found is None and namespace == constants.BODY and identifier == _WORLD:
+        return root.worldbody
     if found is None and namespace in _NAMED_BY_FILE:
         found = _unnamed_asset_by_file(root, namespace, identifier)
     return found

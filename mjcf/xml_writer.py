@@ -18,7 +18,7 @@ defaults of one model never leak into another.
 
 from __future__ import annotations
 
-from mjcf import attribute_types, constants, schema, skin_file
+from mjcf import attribute_types, constants, schema, scoped_lookup, skin_file
 from mjcf.asset import Asset
 from mjcf.attachment import AttachmentFrame
 from mjcf.element import Element, RootElement
@@ -173,7 +173,7 @@ class _Writer:
                 if names is not None and value in names:
                     text = self.resolved[key] = _escape(self.prefix_of(root) + value)
                     return text
-            target = root.find(namespace, value)
+            target = scoped_lookup.lookup(root, namespace, value)
             if target is None:
                 if element._spec.namespace is None and _in_defaults(element):
                     # MuJoCo only checks references of defaults that something uses.

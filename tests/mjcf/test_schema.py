@@ -46,7 +46,8 @@ def _add_path(root, tags):
     element = root
     for tag in tags:
         child_spec = element.spec.children[tag]
-        element = element.add(tag) if child_spec.repeated else getattr(element, tag)
+        child = None if child_spec.repeated else getattr(element, tag)
+        element = element.add(tag) if child is None else child
     return element
 
 
