@@ -22,6 +22,7 @@ class AttachmentFrame(Element):
     """
 
     __slots__ = ("_attached",)
+    _holds_frame_children = True
 
     @property
     def attached_model(self) -> RootElement:

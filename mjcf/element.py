@@ -91,6 +91,9 @@ class Element:
         "__weakref__",
     )
 
+    # Whether this element is an attachment frame, whose joints are named after it.
+    _holds_frame_children = False
+
     def __init__(self, *args, **kwargs):
         raise TypeError(
             "mjcf.Element cannot be created directly: use parent.add(tag, ...) or "
@@ -170,6 +173,9 @@ class Element:
             return prefix + self._attributes["class"]
         name = self._attributes.get("name")
         if name is not None:
+            parent = self._parent
+            if parent is not None and parent._holds_frame_children:
+                return parent._scoped_name(prefix) + name + _SEP
             return prefix + name
         return self._generated_name(prefix)
 
@@ -319,7 +325,7 @@ class Element:
             self._texts.pop(xml_name, None)
             old = self._attributes.pop(xml_name, None)
             if kind == attribute_types.IDENTIFIER and old is not None:
-                self._root._namescope.remove(registry_namespace(self._spec), old)
+                self._root._namescope.remove(self._registry_namespace(), old)
             _set_slot(self, "_xml_cache", None)
             return
         try:
@@ -349,7 +355,7 @@ class Element:
                 f"{_SEP!r}, which separates model scopes (parse with escape_separators=True "
                 "to keep such names)"
             )
-        namespace = registry_namespace(self._spec)
+        namespace = self._registry_namespace()
         old = self._attributes.get(xml_name)
         if old == identifier:
             return
@@ -475,10 +481,22 @@ class Element:
         value = self._attributes.get(identifier_attr)
         if value is None:
             return None
-        namespace = registry_namespace(self._spec)
+        namespace = self._registry_namespace()
         if namespace == constants.DEFAULT and self._parent is self._root:
             return None
         return namespace, value
+
+    def _registry_namespace(self) -> str | None:
+        """Namespace this element's identifier is registered under in its model.
+
+        The joints of an attachment frame are named after the frame ('arm/' + 'x' + '/'),
+        so their identifiers only need to be unique per frame: each frame has its own.
+        """
+        namespace = registry_namespace(self._spec)
+        parent = self._parent
+        if parent is not None and parent._holds_frame_children:
+            return f"{namespace}{constants.NAMESPACE_SEPARATOR}frame{id(parent)}"
+        return namespace
 
     def _register_identifiers(self) -> None:
         """Registers identifiers of this subtree; on a clash, leaves nothing registered."""
@@ -747,17 +765,33 @@ class Element:
     def to_xml_string(
         self,
         prefix_root=None,
-        self_close: bool = True,
+        self_only: bool = False,
         pretty_print: bool = True,
         debug_context=None,
         *,
         precision: int = 17,
         zero_threshold: float = 0,
+        self_close: bool = True,
     ) -> str:
-        """XML text of this element (for a RootElement: a complete, compilable model)."""
+        """XML text of this element (for a RootElement: a complete, compilable model).
+
+        Args:
+          prefix_root: the model (RootElement or its NameScope) identifiers are scoped
+            from; None: this element's own model.
+          self_only: write only this element's own tag, with '...' for its children and
+            without generated names (what `str(element)` shows).
+          pretty_print: indent and end lines; the text then ends with a newline.
+          debug_context: accepted for dm_control compatibility; unused.
+          precision: significant digits of floats; 17 writes the shortest exact form.
+          zero_threshold: floats smaller in magnitude are written as 0.
+          self_close: write empty elements as `<tag/>` rather than `<tag></tag>`.
+        """
         del debug_context
         from mjcf import xml_writer
 
+        if self_only:
+            text = xml_writer.short_string(self, prefix_root)
+            return text + "\n" if pretty_print else text
         return xml_writer.element_to_string(
             self, prefix_root, self_close, pretty_print, precision, zero_threshold
         )

@@ -42,6 +42,9 @@ def lookup(root: RootElement, namespace: str, identifier: str) -> Element | None
             return root._namescope.get_unnamed(namespace, unnamed)
         model = root._attached_model(head)
         if model is None:
+            if not rest and root._frame is not None:
+                # 'arm/x/': joint 'x' of the frame that holds model 'arm'.
+                return _frame_child(root._frame, namespace, head)
             return None
         if not rest and namespace in (constants.BODY, constants.ATTACHMENT_FRAME):
             return model._frame
@@ -60,6 +63,13 @@ def lookup(root: RootElement, namespace: str, identifier: str) -> Element | None
     if found is None and namespace in _NAMED_BY_FILE:
         found = _unnamed_asset_by_file(root, namespace, identifier)
     return found
+
+
+def _frame_child(frame: Element, namespace: str, name: str) -> Element | None:
+    for child in frame._children:
+        if child._spec.namespace == namespace and child._attributes.get("name") == name:
+            return child
+    return None
 
 
 def _unnamed_asset_by_file(root: RootElement, namespace: str, stem: str) -> Element | None:

@@ -77,6 +77,7 @@ class _Writer:
         "visit",
         "caching",
         "assets",
+        "names",
     )
 
     def __init__(self, prefix_root, self_close, pretty, precision, zero_threshold, full):
@@ -112,6 +113,9 @@ class _Writer:
         self.caching = False
         # VFS filename -> contents of the file assets met by `fresh_element`, or None.
         self.assets: dict[str, bytes] | None = None
+        # Whether unnamed elements that compile to a named object get their generated name
+        # (all writes but the short form of `str(element)`).
+        self.names = True
 
     def indent(self, depth: int) -> str:
         return "  " * depth if self.pretty else ""
@@ -259,22 +263,40 @@ class _Writer:
             static = self.static_text(element)
         # Attributes that are neither plain nor the name: references and files.
         scoped = len(attributes) - len(plain)
+        # Name first, then the class, as dm_control writes them; the joints of an
+        # attachment frame (named after the frame) write their name last.
+        name_text = ""
         if spec.identifier == "name":
             identifier = attributes.get("name")
             if identifier is not None:
                 scoped -= 1
-                head = f'<{tag} name="{_escape(prefix + identifier)}"{static}'
-            elif not self.full:
-                head = f"<{tag}{static}"
+                if type(element._parent) is AttachmentFrame:
+                    name_text = f' name="{_escape(element._scoped_name(prefix))}"'
+                else:
+                    name_text = f' name="{_escape(prefix + identifier)}"'
+            elif not self.names:
+                pass
             elif spec.namespace == _JOINT:
                 # An attachment frame's first unnamed joint is named after the frame.
-                head = f'<{tag} name="{element._generated_name(prefix)}"{static}'
+                name_text = f' name="{_escape(element._generated_name(prefix))}"'
             else:
                 auto_id = element._auto_id or element._unnamed_id()
-                head = f'<{tag} name="{prefix or _SEP}{auto_id}"{static}'
+                name_text = f' name="{prefix or _SEP}{auto_id}"'
+        if name_text and type(element._parent) is not AttachmentFrame:
+            head = f"<{tag}{name_text}"
+            name_text = ""
         else:
-            head = f"<{tag}{static}"
-        has_class = False
+            head = f"<{tag}"
+        if spec.takes_class:
+            explicit = attributes.get("class")
+            if explicit is not None:
+                scoped -= 1
+                class_type = spec.attributes["class"].type
+                head += f' class="{self.resolve(element, "class", explicit, class_type)}"'
+            elif dclass is not None:
+                text = self.class_texts.get(dclass)
+                head += text if text is not None else self.class_text(dclass)
+        head += static
         if scoped:
             specs = spec.attributes
             resolved = self.resolved
@@ -285,7 +307,7 @@ class _Writer:
                 kind = value_type.kind
                 if kind == _REFERENCE:
                     if name == "class":
-                        has_class = True
+                        continue
                     text = None
                     if type(value) is str:
                         text = resolved.get((element._root, value_type, value))
@@ -300,9 +322,7 @@ class _Writer:
                             self.assets[filename] = value.contents
                         value = filename
                     head += f' {name}="{_escape(value)}"'
-        if dclass is not None and not has_class and spec.takes_class:
-            text = self.class_texts.get(dclass)
-            head += text if text is not None else self.class_text(dclass)
+        head += name_text
         inherited = dclass
         if spec.sets_childclass:
             childclass = attributes.get("childclass")
@@ -412,14 +432,13 @@ class _Writer:
         child_prefix = self.prefix_of(model)
         static = self.static_text(frame)
         out = self.out
-        out.append(f'{self.indent(depth)}<body name="{_escape(child_prefix)}"{static}>')
+        out.append(f'{self.indent(depth)}<body{static} name="{_escape(child_prefix)}">')
         out.append(self.newline())
         for child in frame._children:
             self.visit(child, depth + 1, own_prefix, dclass)
         world = model._singleton_if_present(constants.WORLDBODY)
         if world is not None:
-            child_class = (child_prefix or _SEP) if self.full else None
-            self.children(world, depth + 1, child_prefix, child_class)
+            self.children(world, depth + 1, child_prefix, child_prefix or _SEP)
         out.append(f"{self.indent(depth)}</body>{self.newline()}")
 
     def default_class(self, default: Element, depth: int, prefix: str, name: str) -> None:
@@ -598,7 +617,6 @@ def element_to_string(
         writer = _Writer(prefix_root, self_close, pretty_print, precision, zero_threshold, True)
         writer.model(element)
         text = "".join(writer.out)
-        text = text[:-1] if pretty_print and text.endswith("\n") else text
         element._xml_string_cache = (key, text)
         if writer.assets is not None:
             element._assets_cache = (element._files_count, writer.assets)
@@ -612,27 +630,46 @@ def element_to_string(
                 name = prefix or _SEP
             writer.default_class(element, 0, prefix, name)
         else:
-            writer.element(element, 0, writer.prefix_of(element._root), None)
-    text = "".join(writer.out)
-    return text[:-1] if pretty_print and text.endswith("\n") else text
+            prefix = writer.prefix_of(element._root)
+            writer.element(element, 0, prefix, _inherited_class(writer, element, prefix))
+    return "".join(writer.out)
 
 
-def short_string(element: Element) -> str:
+def _inherited_class(writer: _Writer, element: Element, prefix: str) -> str | None:
+    """The default class `element` inherits: its nearest `childclass`, else its model's
+    global class (none inside `<default>`)."""
+    parent = element._parent
+    while parent is not None:
+        spec = parent._spec
+        if spec.name == _DEFAULT:
+            return None
+        if spec.sets_childclass:
+            childclass = parent._attributes.get("childclass")
+            if childclass is not None:
+                value_type = spec.attributes["childclass"].type
+                return writer.resolve(parent, "childclass", childclass, value_type)
+        parent = parent._parent
+    return prefix or _SEP
+
+
+def short_string(element: Element, prefix_root=None) -> str:
     """The element's opening tag and attributes, with '...' standing for its children."""
-    writer = _Writer(element._root, True, False, 17, 0, False)
+    writer = _Writer(prefix_root or element._root, True, False, 17, 0, False)
     tag = element._spec.name
     if isinstance(element, RootElement):
         name = element._attributes.get("model")
         head = f'<mujoco model="{_escape(name)}"' if name is not None else "<mujoco"
     elif type(element) is AttachmentFrame:
         static = writer.static_text(element)
-        head = f'<body name="{_escape(element.prefixed_identifier(element._root))}"{static}'
+        head = f'<body{static} name="{_escape(element.prefixed_identifier(element._root))}"'
     elif tag == constants.DEFAULT:
         identifier = element._attributes.get("class")
         head = f'<default class="{_escape(identifier)}"' if identifier else "<default"
     else:
         writer.shallow = True
-        writer.element(element, 0, "", None)
+        writer.names = False
+        prefix = writer.prefix_of(element._root)
+        writer.element(element, 0, prefix, _inherited_class(writer, element, prefix))
         return "".join(writer.out)
     return f"{head}>...</{tag}>" if element._children else f"{head}/>"
 

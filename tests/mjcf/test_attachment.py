@@ -355,3 +355,19 @@ def test_root_full_identifier_is_its_scope_prefix(scene):
     assert scene.full_identifier == ""
     assert arm.full_identifier == "arm/"
     assert hand.full_identifier == "arm/hand/"
+
+
+def test_frames_may_hold_joints_of_the_same_name_scoped_by_frame():
+    scene = mjcf.RootElement(model="scene")
+    left = mjcf.RootElement(model="left")
+    right = mjcf.RootElement(model="right")
+    for model in (left, right):
+        model.worldbody.add("geom", size=[0.1])
+    joint_left = scene.attach(left).add("joint", name="slide", type="slide")
+    joint_right = scene.attach(right).add("joint", name="slide", type="slide")
+    assert joint_left.full_identifier == "left/slide/"
+    assert scene.find("joint", "right/slide/") is joint_right
+    scene.actuator.add("position", name="push", joint=joint_right)
+    physics = mjcf.Physics.from_mjcf_model(scene)
+    assert physics.model.joint("right/slide/").id == physics.bind(joint_right).element_id
+    assert physics.model.actuator("push").trnid[0] == physics.bind(joint_right).element_id

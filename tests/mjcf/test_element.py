@@ -265,7 +265,10 @@ def test_reference_to_removed_element_is_a_clear_error(model):
 
 
 def test_element_repr_shows_its_xml(model):
-    assert repr(model.find("geom", "shin")) == 'MJCF Element: <geom name="shin" size="0.05"/>'
+    assert (
+        repr(model.find("geom", "shin"))
+        == 'MJCF Element: <geom name="shin" class="/" size="0.05"/>'
+    )
 
 
 def test_element_str_elides_children(model):
