@@ -6,6 +6,7 @@ import numpy as np
 
 from mjcf import constants
 from mjcf.element import Element, RootElement
+from mjcf.option_merging import MERGED_OPTIONS
 
 _ATTACHABLE_TAGS = ("site", "body", "worldbody")
 _FRAME_CHILDREN = ("joint", "freejoint", "inertial")
@@ -112,9 +113,28 @@ def attach(site_or_body: Element, model: RootElement) -> AttachmentFrame:
     parent_model._frames.append(frame)
     model._frame = frame
     parent_model._namescope.naming_changed()
+    _merge_options(parent_model, model)
     frame._changed()
     frame._files_changed()
     return frame
+
+
+def _merge_options(parent: RootElement, child: RootElement) -> None:
+    """Sets the options of `parent` that attached models may set differently (see
+    `mjcf.option_merging`) to their values merged with those of `child`."""
+    theirs = global_options(child)
+    for key, merge in MERGED_OPTIONS.items():
+        value = theirs.get(key)
+        if value is None:
+            continue
+        path, name = key
+        element = parent
+        for tag in path:
+            element = element._singleton(element._spec.children[tag])
+        mine = element._attributes.get(name)
+        merged = value if mine is None else merge(mine, value)
+        if merged != mine:
+            element._set_attribute(name, merged)
 
 
 def global_options(model: RootElement) -> dict:
@@ -145,7 +165,7 @@ def _collect_options(element: Element, path: tuple, options: dict) -> None:
 def _check_global_options(parent: RootElement, child: RootElement) -> None:
     mine = global_options(parent)
     for key, value in global_options(child).items():
-        if key not in mine:
+        if key not in mine or key in MERGED_OPTIONS:
             continue
         other = mine[key]
         same = (

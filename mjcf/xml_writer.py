@@ -22,6 +22,7 @@ from mjcf import attribute_types, constants, schema, scoped_lookup, skin_file
 from mjcf.asset import Asset
 from mjcf.attachment import AttachmentFrame
 from mjcf.element import Element, RootElement
+from mjcf.option_merging import MERGED_OPTIONS
 
 _SEP = constants.PREFIX_SEPARATOR
 _STRING = attribute_types.STRING
@@ -481,7 +482,7 @@ class _Writer:
         for tag in schema.root_spec().children:
             if tag in constants.GLOBAL_OPTION_SECTIONS:
                 found = [self.sections[id(model)].get(tag) for model in models]
-                self.merged_singleton(tag, [s for s in found if s is not None], 1)
+                self.merged_singleton((tag,), [s for s in found if s is not None], 1)
             elif tag == constants.DEFAULT:
                 self.defaults(models)
             elif tag in _TOP_ONLY_SECTIONS:
@@ -534,16 +535,24 @@ class _Writer:
                 self.kept(default, 2, prefix, name, self.default_class, default, 2, prefix, name)
         out.append(f"{self.indent(1)}</default>{self.newline()}")
 
-    def merged_singleton(self, tag: str, elements: list, depth: int) -> None:
-        """Writes same-tag singletons of several models as one; the first value set wins."""
+    def merged_singleton(self, path: tuple[str, ...], elements: list, depth: int) -> None:
+        """Writes the singletons at `path` of several models as one: the first value set
+        wins, except for options that combine (see `mjcf.option_merging`)."""
         if not elements:
             return
+        tag = path[-1]
         skip = constants.ASSET_DIRECTORY_ATTRIBUTES if tag == "compiler" else ()
         merged = {}
         for element in elements:
             for name, value in element._attributes.items():
-                if name not in skip and name not in merged:
+                if name in skip:
+                    continue
+                if name not in merged:
                     merged[name] = (element, value)
+                    continue
+                merge = MERGED_OPTIONS.get((path, name))
+                if merge is not None:
+                    merged[name] = (merged[name][0], merge(merged[name][1], value))
         parts = [f"{self.indent(depth)}<{tag}"]
         for name, (element, value) in merged.items():
             value_type = element._spec.attributes[name].type
@@ -563,7 +572,7 @@ class _Writer:
                     child_tags.append(child._spec.name)
         for child_tag in child_tags:
             children = [c for e in elements for c in e._children if c._spec.name == child_tag]
-            self.merged_singleton(child_tag, children, depth + 1)
+            self.merged_singleton(path + (child_tag,), children, depth + 1)
         if len(out) > mark + 2:
             out.append(f"{self.indent(depth)}</{tag}>{self.newline()}")
         elif merged:

@@ -371,3 +371,37 @@ def test_frames_may_hold_joints_of_the_same_name_scoped_by_frame():
     physics = mjcf.Physics.from_mjcf_model(scene)
     assert physics.model.joint("right/slide/").id == physics.bind(joint_right).element_id
     assert physics.model.actuator("push").trnid[0] == physics.bind(joint_right).element_id
+
+
+def test_attaching_merges_buffer_sizes_taking_the_larger():
+    parent = mjcf.RootElement()
+    parent.size.nconmax = 100
+    parent.size.memory = "10000"
+    child = mjcf.RootElement(model="child")
+    child.size.nconmax = 300
+    child.size.njmax = 50
+    child.size.memory = "1M"
+    parent.attach(child)
+    assert parent.size.nconmax == 300
+    assert parent.size.njmax == 50
+    assert parent.size.memory == "1048576"
+    assert '<size nconmax="300" memory="1048576" njmax="50"/>' in parent.to_xml_string()
+
+
+def test_attaching_merges_time_step_taking_the_smaller():
+    parent = mjcf.RootElement()
+    parent.option.timestep = 0.002
+    child = mjcf.RootElement(model="child")
+    child.option.timestep = 0.001
+    parent.attach(child)
+    assert parent.option.timestep == 0.001
+    assert mjcf.Physics.from_mjcf_model(parent).model.opt.timestep == 0.001
+
+
+def test_memory_with_unknown_unit_is_rejected_when_merging():
+    parent = mjcf.RootElement()
+    parent.size.memory = "10X"
+    child = mjcf.RootElement(model="child")
+    child.size.memory = "1M"
+    with pytest.raises(ValueError, match="memory"):
+        parent.attach(child)
