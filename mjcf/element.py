@@ -297,10 +297,25 @@ class Element:
         self._changed()
 
     def set_attributes(self, **attributes) -> None:
-        """Sets several attributes at once; a value of None unsets that attribute."""
-        for name, value in attributes.items():
-            self._set_attribute(name, value)
-        self._changed()
+        """Sets several attributes at once; a value of None unsets that attribute.
+
+        All or nothing: when one value is rejected, the attributes already set by this call
+        get their previous values back before the error propagates.
+        """
+        done = []
+        try:
+            for name, value in attributes.items():
+                spec = self._spec.python_attributes.get(name)
+                previous = self._attributes.get(spec.name) if spec is not None else None
+                self._set_attribute(name, value)
+                done.append((name, previous))
+        except (ValueError, TypeError, AttributeError, FileNotFoundError):
+            for name, previous in reversed(done):
+                self._set_attribute(name, attribute_array.frozen(previous))
+            raise
+        finally:
+            if done:
+                self._changed()
 
     def get_attribute_xml_string(self, attribute_name: str, prefix_root=None) -> str | None:
         """The attribute's value as it is written to XML, or None when unset."""

@@ -9,7 +9,11 @@ if TYPE_CHECKING:
 
 
 class ElementList:
-    """Read-only view of an element's children with one tag; index by position or name."""
+    """Live view of an element's children with one tag, used like a list.
+
+    Index by position, slice, or by identifier (`body.geom['trunk']`); `del view[i]` and
+    `view.clear()` remove elements from the model; new ones are added with `parent.add`.
+    """
 
     __slots__ = ("_parent", "_tag")
 
@@ -30,6 +34,17 @@ class ElementList:
             raise KeyError(f"{self._parent._describe()} has no <{self._tag}> child named {index!r}")
         return items[index]
 
+    def __delitem__(self, index) -> None:
+        """Removes the element(s) at a position, slice or identifier from the model."""
+        found = self[index]
+        for element in found if isinstance(found, list) else [found]:
+            element.remove()
+
+    def clear(self) -> None:
+        """Removes every element of this view from the model."""
+        for element in self._items():
+            element.remove()
+
     def __len__(self) -> int:
         return len(self._items())
 
@@ -41,5 +56,8 @@ class ElementList:
             other = other._items()
         return self._items() == list(other)
 
+    def __str__(self) -> str:
+        return str([str(item) for item in self._items()])
+
     def __repr__(self) -> str:
-        return f"ElementList({self._items()!r})"
+        return f"MJCF Elements List: {self}"

@@ -135,3 +135,40 @@ def test_resolve_references_turns_names_into_elements():
     root.resolve_references()
     assert geom.material is root.asset.material["m"]
     np.testing.assert_array_equal(geom.size, [1])
+
+
+def test_rejected_set_attributes_leaves_earlier_ones_unchanged():
+    root = mjcf.RootElement()
+    body = root.worldbody.add("body", name="foo", pos=[1, 2, 3])
+    with pytest.raises(ValueError, match="pos"):
+        body.set_attributes(name="bar", pos=[1, 2, 3, 4])
+    assert body.name == "foo"
+    assert root.find("body", "bar") is None
+    assert root.find("body", "foo") is body
+    np.testing.assert_array_equal(body.pos, [1, 2, 3])
+
+
+def _three_geoms():
+    body = mjcf.RootElement().worldbody.add("body")
+    for name in ("a", "b", "c"):
+        body.add("geom", name=name, size=[1])
+    return body
+
+
+def test_element_list_slices_and_deletes_like_a_list():
+    body = _three_geoms()
+    assert [g.name for g in body.geom[1:]] == ["b", "c"]
+    assert body.geom[-1].name == "c"
+    del body.geom[0]
+    assert [g.name for g in body.geom] == ["b", "c"]
+    del body.geom["c"]
+    assert [g.name for g in body.geom] == ["b"]
+    assert body.root.find("geom", "c") is None
+
+
+def test_element_list_clear_removes_all_from_model():
+    body = _three_geoms()
+    body.geom.clear()
+    assert len(body.geom) == 0
+    assert not body.geom
+    assert body.root.find_all("geom") == []
