@@ -412,7 +412,7 @@ class Element:
             if not directory:
                 directory = compiler._attributes.get("assetdir") or ""
         stem, extension = os.path.splitext(os.path.basename(path))
-        for key in (path, os.path.join(directory, path) if directory else None):
+        for key in (path, os.path.normpath(os.path.join(directory, path)) if directory else None):
             if key is not None and key in scope.assets:
                 return Asset(scope.assets[key], extension, stem)
         full_path = path
