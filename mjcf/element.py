@@ -1021,6 +1021,13 @@ class RootElement(Element):
     def remove(self, affect_attachments: bool = False) -> None:
         raise ValueError("the <mujoco> root element cannot be removed; use detach()")
 
+    def include_copy(self, other: RootElement, override_attributes: bool = False) -> None:
+        """Copies the contents of model `other` into this model (see
+        `mjcf.copier.include_copy`)."""
+        from mjcf import copier
+
+        copier.include_copy(self, other, override_attributes)
+
     def resolve_references(self) -> None:
         """Replaces identifier strings in reference attributes (an actuator's `joint`, a
         geom's `material`) by the elements they name, where this model has such an element.
