@@ -27,6 +27,9 @@ _MAX_QUOTED_XML = 500
 # The name under which MJB bytes are handed to MuJoCo in a one-file virtual file system.
 _MJB_NAME = "model.mjb"
 
+# dm_control's name for the binding class, which code may construct or check against.
+Binding = binding_module.Binding
+
 
 def _log_mujoco_warning(message: str) -> None:
     logging.warning("MuJoCo warning: %s", message)
@@ -183,6 +186,23 @@ class Physics:
         data = mujoco.MjData(compile_mjcf_model(mjcf_model))
         self._close_renderers()
         self._initialize(data, mjcf_model)
+
+    def reload_from_xml_string(self, xml_string: str, assets: dict | None = None) -> None:
+        """Recompiles this Physics from MJCF text, as ``from_xml_string`` would.
+
+        Earlier bindings are dropped; elements of the MJCF model this Physics was built
+        from (if any) still bind, by name, to the new model.
+        """
+        model = mujoco.MjModel.from_xml_string(xml_string, assets=assets)
+        self._close_renderers()
+        self._initialize(mujoco.MjData(model), self._mjcf_model)
+
+    def reload_from_xml_path(self, file_path: str) -> None:
+        """Recompiles this Physics from the MJCF file at ``file_path`` (see
+        ``reload_from_xml_string``)."""
+        model = mujoco.MjModel.from_xml_path(str(file_path))
+        self._close_renderers()
+        self._initialize(mujoco.MjData(model), self._mjcf_model)
 
     # Structures.
 
