@@ -10,6 +10,7 @@ from mjcf.option_merging import MERGED_OPTIONS
 
 _ATTACHABLE_TAGS = ("site", "body", "worldbody")
 _FRAME_CHILDREN = ("joint", "freejoint", "inertial")
+_HINGED = ("joint", "inertial")
 _SITE_POSE_ATTRIBUTES = ("pos", "quat", "axisangle", "xyaxes", "zaxis", "euler")
 
 
@@ -31,7 +32,15 @@ class AttachmentFrame(Element):
 
     def _allowed_children(self) -> dict:
         children = self._spec.children
-        return {tag: children[tag] for tag in _FRAME_CHILDREN if tag in children}
+        # Only a model attached to the world can float freely.
+        allowed = _FRAME_CHILDREN if self._parent._spec.name == constants.WORLDBODY else _HINGED
+        return {tag: children[tag] for tag in allowed if tag in children}
+
+    def all_children(self) -> list[Element]:
+        """The frame's own children, then the elements of the attached model's worldbody."""
+        world = self._attached._singleton_if_present(constants.WORLDBODY)
+        attached = world.all_children() if world is not None else []
+        return list(self._children) + [c for c in attached if c._spec.repeated]
 
     def _scoped_name(self, prefix: str) -> str:
         return prefix + self._attached._namescope.name + constants.PREFIX_SEPARATOR
@@ -74,7 +83,7 @@ def attach(site_or_body: Element, model: RootElement) -> AttachmentFrame:
     if where._removed:
         raise RuntimeError(f"{where._describe()} has been removed from its model")
     if not isinstance(model, RootElement):
-        raise TypeError(
+        raise ValueError(
             f"{where._describe()}.attach: expected an mjcf.RootElement, got {type(model).__name__}"
         )
     parent_model = where._root

@@ -627,8 +627,20 @@ class Element:
         return self._child_view(child_spec)
 
     def all_children(self) -> list[Element]:
-        """All children in order (attachment frames included, attached models' elements not)."""
-        return list(self._children)
+        """All children in order, attachment frames included.
+
+        As in dm_control, a top-level section (`root.actuator`, `root.asset`, ...) also
+        lists the repeated elements of the same section of each attached model, and an
+        attachment frame the elements of its attached model's worldbody.
+        """
+        children = list(self._children)
+        root = self._root
+        if self._parent is root and root._frames and self._spec.name != constants.WORLDBODY:
+            for frame in root._frames:
+                section = frame._attached._singleton_if_present(self._spec.name)
+                if section is not None:
+                    children += [c for c in section.all_children() if c._spec.repeated]
+        return children
 
     # ------------------------------------------------------------------------ sameness
 

@@ -35,6 +35,10 @@ _DEFAULT = constants.DEFAULT
 _JOINT = constants.JOINT
 _MAIN = "main"
 _TOP_ONLY_SECTIONS = ("statistic",)
+# Top-level sections whose element text is only the model's own: the world (attached models
+# hang below attachment frames), defaults (scoped per model) and the global settings.
+_NOT_SHARED = (constants.WORLDBODY, constants.DEFAULT, *_TOP_ONLY_SECTIONS)
+_NOT_SHARED += constants.GLOBAL_OPTION_SECTIONS
 # Element._xml_cache is (precision key, plain attribute text, stamp, scope prefix, inherited
 # class, opening tag, class the children inherit); the last five are None when only the plain
 # text is cached. Setting it bypasses Element.__setattr__, which handles XML attributes.
@@ -470,11 +474,7 @@ class _Writer:
             if self.prefix_root is root:
                 # Gathered as get_assets would: skins scoped by prefixes relative to `root`.
                 self.assets = {}
-        models = _models_below(root)
-        for model in models:
-            self.prefixes[id(model)] = model._namescope.full_prefix(self.prefix_root)
-            # Section tag -> section, looked up once per tag per model below.
-            self.sections[id(model)] = {c._spec.name: c for c in reversed(model._children)}
+        models = self.scope_models(root)
         out = self.out
         name = root._attributes.get("model")
         out.append(f'<mujoco model="{_escape(name)}">' if name is not None else "<mujoco>")
@@ -484,7 +484,7 @@ class _Writer:
                 found = [self.sections[id(model)].get(tag) for model in models]
                 self.merged_singleton((tag,), [s for s in found if s is not None], 1)
             elif tag == constants.DEFAULT:
-                self.defaults(models)
+                self.defaults(models, 1)
             elif tag in _TOP_ONLY_SECTIONS:
                 section = root._singleton_if_present(tag)
                 if section is not None and (section._children or section._attributes):
@@ -504,7 +504,7 @@ class _Writer:
             if section is None:
                 continue
             prefix = self.prefixes[id(model)]
-            dclass = (prefix or _SEP) if self.full else None
+            dclass = prefix or _SEP
             self.kept(
                 section,
                 depth + 1,
@@ -521,19 +521,45 @@ class _Writer:
             return
         out.append(f"{self.indent(depth)}</{tag}>{self.newline()}")
 
-    def defaults(self, models) -> None:
+    def defaults(self, models, depth: int) -> None:
+        """Writes the `<default>` section: each model's global class, named after its scope
+        prefix, holding the model's classes."""
         out = self.out
-        out.append(f"{self.indent(1)}<default>{self.newline()}")
+        out.append(f"{self.indent(depth)}<default>{self.newline()}")
+        inner = depth + 1
         for model in models:
             prefix = self.prefixes[id(model)]
             default = self.sections[id(model)].get(constants.DEFAULT)
             if default is None:
-                out.append(f'{self.indent(2)}<default class="{_escape(prefix or _SEP)}"')
+                out.append(f'{self.indent(inner)}<default class="{_escape(prefix or _SEP)}"')
                 out.append(self.close("default"))
             else:
                 name = prefix or _SEP
-                self.kept(default, 2, prefix, name, self.default_class, default, 2, prefix, name)
-        out.append(f"{self.indent(1)}</default>{self.newline()}")
+                self.kept(
+                    default, inner, prefix, name, self.default_class, default, inner, prefix, name
+                )
+        out.append(f"{self.indent(depth)}</default>{self.newline()}")
+
+    def scope_models(self, root: RootElement) -> list[RootElement]:
+        """Notes the scope prefix and sections of `root` and every model attached below it
+        (see `model`); returns those models."""
+        models = _models_below(root)
+        for model in models:
+            self.prefixes[id(model)] = model._namescope.full_prefix(self.prefix_root)
+            # Section tag -> section, looked up once per tag per model below.
+            self.sections[id(model)] = {c._spec.name: c for c in reversed(model._children)}
+        return models
+
+    def shared_section(self, section: Element) -> None:
+        """Writes top-level `section` with the same section of every model attached below
+        its model, as the whole model's text has it."""
+        models = self.scope_models(section._root)
+        mark = len(self.out)
+        self.section(section._spec.name, models, 0)
+        if len(self.out) == mark:
+            tag = section._spec.name
+            self.out.append(f"<{tag}/>" if self.self_close else f"<{tag}></{tag}>")
+            self.out.append(self.newline())
 
     def merged_singleton(self, path: tuple[str, ...], elements: list, depth: int) -> None:
         """Writes the singletons at `path` of several models as one: the first value set
@@ -632,16 +658,31 @@ def element_to_string(
         return text
     else:
         writer = _Writer(prefix_root, self_close, pretty_print, precision, zero_threshold, False)
-        if element._spec.name == constants.DEFAULT and element._parent is not None:
+        if element._spec.name == constants.DEFAULT and element._parent is element._root:
+            # As in the whole model: the model's global class, then those of attached models.
+            writer.scope_models(element._root)
+            writer.defaults(_models_below(element._root), 0)
+        elif element._spec.name == constants.DEFAULT and element._parent is not None:
             prefix = writer.prefix_of(element._root)
-            name = prefix + element._attributes.get("class", "")
-            if element._parent is element._root and "class" not in element._attributes:
-                name = prefix or _SEP
-            writer.default_class(element, 0, prefix, name)
+            writer.default_class(element, 0, prefix, prefix + element._attributes["class"])
+        elif _is_shared_section(element):
+            writer.shared_section(element)
         else:
             prefix = writer.prefix_of(element._root)
             writer.element(element, 0, prefix, _inherited_class(writer, element, prefix))
     return "".join(writer.out)
+
+
+def _is_shared_section(element: Element) -> bool:
+    """Whether `element` is a top-level section that stands for the same section of the
+    models attached below its model too (`root.actuator`, `root.contact`, ...)."""
+    root = element._root
+    return (
+        element._parent is root
+        and bool(root._frames)
+        and element._spec.name not in _NOT_SHARED
+        and bool(element._children or any(f._attached._children for f in root._frames))
+    )
 
 
 def _inherited_class(writer: _Writer, element: Element, prefix: str) -> str | None:

@@ -141,10 +141,32 @@ def test_find_all_default_leaves_out_attached_models_classes(scene):
     assert [d.dclass for d in scene.find_all("default")] == [None]
 
 
-def test_parent_elements_do_not_list_child_elements(scene):
-    frame = scene.attach(_arm())
+def test_frame_and_sections_list_the_attached_models_elements(scene):
+    arm = _arm()
+    frame = scene.attach(arm)
     assert frame in scene.worldbody.all_children()
-    assert frame.all_children() == []
+    assert frame.all_children() == arm.worldbody.all_children()
+    assert frame.all_children()
+    for element in arm.actuator.all_children():
+        assert element in scene.actuator.all_children()
+    assert arm.find("joint", "twist") not in scene.worldbody.all_children()
+
+
+def test_section_text_includes_attached_models_section(scene):
+    arm = _arm()
+    scene.attach(arm)
+    text = scene.actuator.to_xml_string(pretty_print=False)
+    assert text.startswith("<actuator>") and 'name="arm/' in text
+    default_text = scene.default.to_xml_string(pretty_print=False)
+    assert default_text.startswith('<default><default class="/"')
+    assert '<default class="arm/"' in default_text
+
+
+def test_frame_below_a_body_cannot_hold_a_freejoint(scene):
+    frame = scene.worldbody.add("body", name="holder").attach(_arm())
+    with pytest.raises(AttributeError):
+        frame.add("freejoint")
+    frame.add("joint", type="hinge")
 
 
 def test_references_across_models_by_element_and_scoped_name(scene):
