@@ -481,13 +481,9 @@ def _binding_class(family: Family) -> type:
 
 
 def _object_id(layout: ModelLayout, family: Family, root, element) -> int:
-    if element.tag == "worldbody":
-        if root is not None and element.root is not root:
-            raise ValueError(
-                f"cannot bind {describe(element)}: the worldbody of an attached model has no "
-                "body of its own; bind its attachment frame (mjcf.get_attachment_frame(model))"
-            )
+    if element.tag == "worldbody" and (root is None or element.root is root):
         return 0
+    # An attached model's worldbody is named after (and compiles to) its attachment frame.
     name = element.full_identifier
     if root is not None and not _belongs(root, element, family.namespace, name):
         hint = ""

@@ -379,11 +379,6 @@ def test_element_of_a_detached_model_is_an_error(scene):
         scene.physics.bind(scene.robot_site)
 
 
-def test_worldbody_of_an_attached_model_is_an_error_pointing_to_the_frame(scene):
-    with pytest.raises(ValueError, match="attachment frame"):
-        scene.physics.bind(scene.robot.worldbody)
-
-
 def test_non_element_in_a_list_is_an_error_naming_its_position(scene):
     with pytest.raises(ValueError, match="item 1 is a NoneType"):
         scene.physics.bind([scene.ball, None])
@@ -435,3 +430,16 @@ def test_reload_from_xml_string_drops_earlier_bindings(scene):
     after = physics.bind(scene.ball)
     assert after is not before
     np.testing.assert_array_equal(after.rgba, [1, 0, 0, 1])
+
+
+def test_attached_models_worldbody_binds_its_attachment_frame():
+    scene = mjcf.RootElement(model="scene")
+    arm = mjcf.RootElement(model="arm")
+    arm.worldbody.add("geom", size=[0.1], mass=2)
+    frame = scene.attach(arm)
+    frame.pos = [0, 0, 3]
+    physics = mjcf.Physics.from_mjcf_model(scene)
+    bound = physics.bind(arm.worldbody)
+    assert bound.element_id == physics.bind(frame).element_id
+    np.testing.assert_allclose(bound.xpos, [0, 0, 3])
+    assert physics.bind(scene.worldbody).element_id == 0
