@@ -635,7 +635,11 @@ class Element:
         """
         children = list(self._children)
         root = self._root
-        if self._parent is root and root._frames and self._spec.name != constants.WORLDBODY:
+        if (
+            self._parent is root
+            and root._frames
+            and self._spec.name not in (constants.WORLDBODY, constants.DEFAULT)
+        ):
             for frame in root._frames:
                 section = frame._attached._singleton_if_present(self._spec.name)
                 if section is not None:

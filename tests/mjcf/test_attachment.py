@@ -427,3 +427,15 @@ def test_memory_with_unknown_unit_is_rejected_when_merging():
     child.size.memory = "1M"
     with pytest.raises(ValueError, match="memory"):
         parent.attach(child)
+
+
+def test_section_lists_show_attached_models_elements_after_own(scene):
+    arm = _arm()
+    scene.actuator.add("motor", name="own", joint=scene.worldbody.add("body").add("joint"))
+    scene.attach(arm)
+    motors = scene.actuator.motor
+    assert [m.name for m in motors] == ["own", "drive"]
+    assert motors["arm/drive"] is arm.actuator.motor["drive"]
+    with pytest.raises(KeyError):
+        motors["arm/missing"]
+    assert len(scene.worldbody.body) == 1 + 1  # its own body and the attachment frame
