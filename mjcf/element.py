@@ -68,9 +68,12 @@ class Element:
     Elements are created by `parent.add(tag, **attributes)` (or by parsing XML), never
     directly. XML attributes are Python attributes: `geom.size` is a NumPy array (None when
     unset), `geom.size = [0.1]` validates and sets it, `geom.size = None` or `del geom.size`
-    unsets it; the XML `class` attribute is `dclass`. Children that may appear at most once
-    are attributes too (`body.inertial`, `root.worldbody`, created on first access);
-    repeated children are listed by tag (`body.geom[0]`, `body.geom['name']`).
+    unsets it; the XML `class` attribute is `dclass`. Array values may also be written in
+    place (`geom.rgba[3] = 0.5`; see `mjcf.attribute_array`). Children that may appear at
+    most once are attributes too: sections and settings (`root.worldbody`, `root.option`)
+    always exist (created on first access), while `body.inertial` and `body.freejoint` are
+    None until added. Repeated children are listed by tag (`body.geom[0]`,
+    `body.geom['name']`).
 
     Identifiers (`name`, and `class` of a default) are unique per namespace within a model.
     Reference attributes (e.g. an actuator's `joint`) take an element or its identifier;
