@@ -243,14 +243,15 @@ class Physics:
         equal sequence of elements, again returns the same object.
 
         Returns:
-          A ``Binding``; None for None; an empty binding for an empty sequence.
+          A ``Binding``; an empty binding for an empty sequence.
 
         Raises:
-          ValueError: if an element is not part of the model compiled into this Physics,
-            is not compiled into a MuJoCo object, or the elements are of mixed kinds.
+          ValueError: ``mjcf_elements`` is None, an element is not part of the model
+            compiled into this Physics or is not compiled into a MuJoCo object, or the
+            elements are of mixed kinds (mocap and other bodies count as different kinds).
         """
         if mjcf_elements is None:
-            return None
+            raise ValueError("bind expects an mjcf element or a sequence of them, got None")
         key = tuple(mjcf_elements) if type(mjcf_elements) is list else mjcf_elements
         try:
             return self._bindings[key]

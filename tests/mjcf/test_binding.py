@@ -302,8 +302,9 @@ def test_binding_a_generator_binds_its_elements(scene):
     assert bound is physics.bind([scene.ball, scene.upper])
 
 
-def test_binding_none_returns_none(scene):
-    assert scene.physics.bind(None) is None
+def test_binding_none_is_value_error(scene):
+    with pytest.raises(ValueError, match="None"):
+        scene.physics.bind(None)
 
 
 def test_empty_binding_reads_empty_arrays(scene):
