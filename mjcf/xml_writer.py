@@ -664,7 +664,7 @@ def element_to_string(
             writer.defaults(_models_below(element._root), 0)
         elif element._spec.name == constants.DEFAULT and element._parent is not None:
             prefix = writer.prefix_of(element._root)
-            writer.default_class(element, 0, prefix, prefix + element._attributes["class"])
+            writer.default_class(element, 0, prefix, prefix + element._attributes.get("class", ""))
         elif _is_shared_section(element):
             writer.shared_section(element)
         else:
