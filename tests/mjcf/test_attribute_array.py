@@ -81,3 +81,15 @@ def test_copies_do_not_share_written_arrays():
 def test_same_array_object_is_returned_on_each_read():
     root, geom = _model_with_geom()
     assert geom.rgba is geom.rgba
+
+
+def test_in_place_write_after_cached_writes_reaches_nested_element_text():
+    root, _ = _model_with_geom()
+    body = root.worldbody.add("body", name="b")
+    inner = body.add("geom", name="inner", size=[0.2], rgba=[0, 0, 1, 1])
+    root.to_xml_string()
+    root.to_xml_string()
+    root.to_xml_string()
+    inner.rgba[1] = 0.5
+    assert 'rgba="0 0.5 1 1"' in root.to_xml_string()
+    assert 'rgba="0 0.5 1 1"' in body.to_xml_string()
