@@ -60,6 +60,15 @@ class _Rows:
     def convert(self, key):
         if isinstance(key, str):
             return self._layout.single_index(self._rule, self._id(key))
+        if isinstance(key, np.ndarray) and key.ndim > 1 and key.size and _is_name(key.flat[0]):
+            # A grid of names (as np.ix_ makes): one row per name, in the grid's shape.
+            rows = self._layout.multi_index(self._rule, [self._id(name) for name in key.flat])
+            if rows.size != key.size:
+                raise IndexError(
+                    f"{self._field!r}: a {key.ndim}-D array of names needs objects with one "
+                    f"row each, but some of {key.ravel().tolist()} own several rows"
+                )
+            return rows.reshape(key.shape)
         if isinstance(key, (list, np.ndarray)) and len(key) and _is_name(key[0]):
             return self._layout.multi_index(self._rule, [self._id(name) for name in key])
         return key
@@ -187,6 +196,9 @@ class FieldIndexer:
             return self._column_index(item, names)
         if isinstance(item, (list, tuple)) and item and isinstance(item[0], str):
             return [self._column_index(label, names) for label in item]
+        if isinstance(item, np.ndarray) and item.size and _is_name(item.flat[0]):
+            indices = [self._column_index(str(label), names) for label in item.flat]
+            return np.array(indices, dtype=np.intp).reshape(item.shape)
         return item
 
     def _column_index(self, label: str, names) -> int:

@@ -236,3 +236,15 @@ def test_attached_model_objects_are_named_with_their_scope():
     root.worldbody.attach(robot).pos = [1, 0, 0]
     physics = Physics.from_mjcf_model(root)
     np.testing.assert_array_equal(physics.named.data.site_xpos["robot/grip"], [1, 0, 0.5])
+
+
+def test_open_mesh_grid_of_names_and_column_labels(physics):
+    rows, columns = np.ix_(["lower", "ball"], ["r", "a"])
+    np.testing.assert_array_equal(physics.named.model.geom_rgba[rows, columns], [[0, 1], [1, 1]])
+    physics.named.model.geom_rgba[rows, columns] = [[0.5, 0.25], [0.75, 0.125]]
+    np.testing.assert_array_equal(physics.named.model.geom_rgba["lower"], [0.5, 0, 1, 0.25])
+
+
+def test_grid_of_names_owning_several_rows_is_index_error(physics):
+    with pytest.raises(IndexError, match="several rows"):
+        physics.named.data.qpos[np.array([["free"], ["hinge"]])]
