@@ -1,6 +1,7 @@
 """Composer: build reinforcement-learning environments from reusable MJCF entities."""
 
 from composer.arena import Arena
+from composer.constants import SENSOR_SITES_GROUP
 from composer.define import cached_property, observable
 from composer.entity import Entity, FreePropObservableMixin, ModelWrapperEntity, Observables
 from composer.environment import (
@@ -28,6 +29,7 @@ __all__ = [
     "Observables",
     "PhysicsError",
     "Robot",
+    "SENSOR_SITES_GROUP",
     "Task",
     "cached_property",
     "observable",

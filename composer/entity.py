@@ -69,10 +69,13 @@ class Entity(abc.ABC):
 
     @property
     def root_body(self):
-        """The body carrying this entity: its attachment frame, or its worldbody if unattached."""
-        if self.parent is not None:
-            return mjcf.get_attachment_frame(self.mjcf_model)
-        return self.mjcf_model.worldbody
+        """The body carrying this entity: its attachment frame, or its worldbody if unattached.
+
+        The frame is returned whenever the MJCF model is attached, also when that was done
+        with `mjcf` directly (`site.attach(entity.mjcf_model)`) rather than `Entity.attach`.
+        """
+        frame = mjcf.get_attachment_frame(self.mjcf_model)
+        return self.mjcf_model.worldbody if frame is None else frame
 
     def iter_entities(self, exclude_self: bool = False):
         """Yields this entity (unless `exclude_self`) and everything attached below it.
@@ -168,12 +171,16 @@ class Entity(abc.ABC):
     def set_pose(self, physics, position=None, quaternion=None) -> None:
         """Sets the position and/or orientation of this entity (see `get_pose` for frames).
 
-        A fixed entity's pose is written into the compiled model (its attachment
-        frame's body pos/quat); the quaternion is normalised.
+        A free entity's pose is written into its joint's qpos, a fixed entity's into the
+        compiled model (its attachment frame's body pos/quat). The quaternion is
+        normalised in both cases.
 
         Raises:
           RuntimeError: if the entity is not attached.
         """
+        if quaternion is not None:
+            quaternion = np.asarray(quaternion, dtype=np.float64)
+            quaternion = quaternion / np.linalg.norm(quaternion)
         free_joint = self._free_joint()
         if free_joint is not None:
             qpos = physics.bind(free_joint).qpos
@@ -186,8 +193,7 @@ class Entity(abc.ABC):
         if position is not None:
             frame.pos = position
         if quaternion is not None:
-            quaternion = np.asarray(quaternion, dtype=np.float64)
-            frame.quat = quaternion / np.linalg.norm(quaternion)
+            frame.quat = quaternion
 
     def shift_pose(
         self, physics, position=None, quaternion=None, rotate_velocity: bool = False
@@ -243,6 +249,19 @@ class Entity(abc.ABC):
             qvel[:3] = velocity
         if angular_velocity is not None:
             qvel[3:] = angular_velocity
+
+    def configure_joints(self, physics, position) -> None:
+        """Sets the positions of the joints in this entity's own MJCF model.
+
+        `position` holds the `qpos` values of the joints in
+        `mjcf_model.find_all('joint', exclude_attachments=True)` order. Joints inside
+        attached entities are left alone, but the root joints of attached entities (in
+        their attachment frames, which belong to this model) are included. Subclasses
+        with actuated joints may override this to keep the actuators' controls consistent
+        with the new positions.
+        """
+        joints = self.mjcf_model.find_all("joint", exclude_attachments=True)
+        physics.bind(joints).qpos = position
 
     def global_vector_to_local_frame(self, physics, vec_in_world_frame) -> np.ndarray:
         """Expresses world-frame vectors (last axis of size 2 or 3) in this entity's frame.

@@ -3,6 +3,7 @@
 import enum
 import math
 import numbers
+import warnings
 import weakref
 
 import dm_env
@@ -11,7 +12,7 @@ from absl import logging
 
 import mjcf
 from composer import observation
-from composer.action_validation import ActionValidator
+from composer.action_validation import action_validator
 from composer.hooks import HOOK_NAMES, EnvironmentHooks
 from composer.model_snapshot import ModelSnapshot, snapshots_supported
 from mjcf.physics import compile_mjcf_model
@@ -69,8 +70,9 @@ class Environment(dm_env.Environment):
         indistinguishable and much faster. A recompile that changed only parameter
         values (colours, sizes, masses, ...) loads them into the current model, so
         the Physics and its bindings carry over; one that changed the model's
-        structure gives a new Physics. If False the model is compiled once and
-        changes made to it during an episode persist.
+        structure gives a new Physics. If False, this happens only before the first
+        episode (so `after_compile` hooks added after construction still run once), and
+        changes made to the model during an episode persist.
       fixed_initial_state: restore the random state at every reset, so that every
         episode starts from the same state.
       delayed_observation_padding: an `ObservationPadding`.
@@ -132,6 +134,7 @@ class Environment(dm_env.Environment):
         self._snapshot = None
         self._compiled_modification_count = None
         self._reset_next_step = True
+        self._episode_mjcf_prepared = False
         self._compile()
         self._observation_updater.reset(self._physics_proxy, self._random_state)
         self._fixed_random_state = self._random_state.get_state() if fixed_initial_state else None
@@ -185,6 +188,27 @@ class Environment(dm_env.Environment):
         spec = self._task.get_discount_spec()
         return super().discount_spec() if spec is None else spec
 
+    def step_spec(self) -> dm_env.TimeStep:
+        """Deprecated: use `reward_spec()` and `discount_spec()`.
+
+        Returns a TimeStep of the task's reward and discount specs and the observation spec.
+
+        Raises:
+          NotImplementedError: if the task defines no reward spec or no discount spec.
+        """
+        warnings.warn(
+            "Environment.step_spec is deprecated; use reward_spec() and discount_spec()",
+            DeprecationWarning,
+            stacklevel=2,
+        )
+        reward, discount = self._task.get_reward_spec(), self._task.get_discount_spec()
+        if reward is None or discount is None:
+            raise NotImplementedError(
+                f"step_spec: the task {type(self._task).__name__} defines no "
+                f"{'reward' if reward is None else 'discount'} spec"
+            )
+        return dm_env.TimeStep(None, reward, discount, self.observation_spec())
+
     def close(self) -> None:
         """Frees the physics; the environment cannot be used afterwards."""
         if self._physics is not None:
@@ -225,7 +249,7 @@ class Environment(dm_env.Environment):
             self._snapshot = ModelSnapshot(physics.model.ptr) if snapshots_supported() else None
         self._hooks.refresh_entity_hooks()
         self._run_after_compile_hooks()
-        self._check_action = ActionValidator(self._task.action_spec(self._physics_proxy))
+        self._check_action = action_validator(self._task.action_spec(self._physics_proxy))
         self._n_sub_steps = self._task_sub_steps()
         self._observation_updater = self._make_observation_updater()
 
@@ -297,12 +321,15 @@ class Environment(dm_env.Environment):
                 attempt += 1
 
     def _reset_attempt(self) -> dm_env.TimeStep:
-        if self._recompile_mjcf_every_episode:
+        # Hooks replaced on the task or an entity since the last episode take effect now.
+        self._hooks.refresh_entity_hooks()
+        if self._recompile_mjcf_every_episode or not self._episode_mjcf_prepared:
             self._hooks.initialize_episode_mjcf(self._random_state)
             if self._snapshot is None or self._model_changed_since_compile():
                 self._compile()
             else:
                 self._restore_compiled_model()
+            self._episode_mjcf_prepared = True
         with self._physics.reset_context():
             self._hooks.initialize_episode(self._physics_proxy, self._random_state)
         self._observation_updater.reset(self._physics_proxy, self._random_state)

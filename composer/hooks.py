@@ -56,16 +56,16 @@ class _Chain:
 
 
 class EnvironmentHooks:
-    """The hooks an environment calls, memoised per compiled model.
+    """The hooks an environment calls, memoised per episode.
 
     For each hook name the task's hook runs first, then each entity's (depth first
     through the entity tree), then the extra hooks in the order they were added.
     Hooks that do nothing (the base classes' defaults, or empty functions) are left
-    out. `refresh_entity_hooks` rescans the entity tree; the environment calls it
-    once per compile. Task and extra hooks receive the action where entity hooks
-    do not: `before_step` and `before_substep` are called as
-    `task_or_extra_hook(physics, action, random_state)` and
-    `entity_hook(physics, random_state)`.
+    out. `refresh_entity_hooks` rescans the task and the entity tree; the environment
+    calls it at every reset and compile, so hooks replaced between episodes are used.
+    Task and extra hooks receive the action where entity hooks do not: `before_step`
+    and `before_substep` are called as `task_or_extra_hook(physics, action,
+    random_state)` and `entity_hook(physics, random_state)`.
 
     When the task keeps `Task.before_step`, which only writes the action into the
     controls, `task_sets_controls` is True and `before_step` leaves that hook out: the

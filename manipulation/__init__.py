@@ -6,6 +6,7 @@ episodes, a 9-D action (six arm joint velocities, then three finger velocities).
 """
 
 import composer
+from manipulation import _gymnasium_hook
 from manipulation.tasks import registry
 from manipulation.tasks import task_constants as _task_constants
 
@@ -35,3 +36,6 @@ def load(environment_name: str, seed=None) -> composer.Environment:
     """
     task = registry.build_task(environment_name)
     return composer.Environment(task, time_limit=_task_constants.TIME_LIMIT, random_state=seed)
+
+
+_gymnasium_hook.register_when_gymnasium_is_imported()

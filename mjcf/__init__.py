@@ -10,7 +10,7 @@ from mjcf.asset import Asset
 from mjcf.constants import PREFIX_SEPARATOR
 from mjcf.element import Element, RootElement
 from mjcf.export_with_assets import export_with_assets, export_with_assets_as_zip
-from mjcf.parser import from_file, from_path, from_xml_string
+from mjcf.parser import from_file, from_path, from_xml_string, from_zip
 from mjcf.traversal_utils import (
     commit_defaults,
     get_attachment_frame,
@@ -33,6 +33,7 @@ __all__ = [
     "from_file",
     "from_path",
     "from_xml_string",
+    "from_zip",
     "get_attachment_frame",
     "get_frame_freejoint",
     "get_frame_joints",

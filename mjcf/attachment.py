@@ -6,9 +6,11 @@ import numpy as np
 
 from mjcf import constants
 from mjcf.element import Element, RootElement
+from mjcf.option_merging import MERGED_OPTIONS
 
 _ATTACHABLE_TAGS = ("site", "body", "worldbody")
 _FRAME_CHILDREN = ("joint", "freejoint", "inertial")
+_HINGED = ("joint", "inertial")
 _SITE_POSE_ATTRIBUTES = ("pos", "quat", "axisangle", "xyaxes", "zaxis", "euler")
 
 
@@ -22,6 +24,7 @@ class AttachmentFrame(Element):
     """
 
     __slots__ = ("_attached",)
+    _holds_frame_children = True
 
     @property
     def attached_model(self) -> RootElement:
@@ -29,7 +32,15 @@ class AttachmentFrame(Element):
 
     def _allowed_children(self) -> dict:
         children = self._spec.children
-        return {tag: children[tag] for tag in _FRAME_CHILDREN if tag in children}
+        # Only a model attached to the world can float freely.
+        allowed = _FRAME_CHILDREN if self._parent._spec.name == constants.WORLDBODY else _HINGED
+        return {tag: children[tag] for tag in allowed if tag in children}
+
+    def all_children(self) -> list[Element]:
+        """The frame's own children, then the elements of the attached model's worldbody."""
+        world = self._attached._singleton_if_present(constants.WORLDBODY)
+        attached = world.all_children() if world is not None else []
+        return list(self._children) + [c for c in attached if c._spec.repeated]
 
     def _scoped_name(self, prefix: str) -> str:
         return prefix + self._attached._namescope.name + constants.PREFIX_SEPARATOR
@@ -72,7 +83,7 @@ def attach(site_or_body: Element, model: RootElement) -> AttachmentFrame:
     if where._removed:
         raise RuntimeError(f"{where._describe()} has been removed from its model")
     if not isinstance(model, RootElement):
-        raise TypeError(
+        raise ValueError(
             f"{where._describe()}.attach: expected an mjcf.RootElement, got {type(model).__name__}"
         )
     parent_model = where._root
@@ -111,9 +122,28 @@ def attach(site_or_body: Element, model: RootElement) -> AttachmentFrame:
     parent_model._frames.append(frame)
     model._frame = frame
     parent_model._namescope.naming_changed()
+    _merge_options(parent_model, model)
     frame._changed()
     frame._files_changed()
     return frame
+
+
+def _merge_options(parent: RootElement, child: RootElement) -> None:
+    """Sets the options of `parent` that attached models may set differently (see
+    `mjcf.option_merging`) to their values merged with those of `child`."""
+    theirs = global_options(child)
+    for key, merge in MERGED_OPTIONS.items():
+        value = theirs.get(key)
+        if value is None:
+            continue
+        path, name = key
+        element = parent
+        for tag in path:
+            element = element._singleton(element._spec.children[tag])
+        mine = element._attributes.get(name)
+        merged = value if mine is None else merge(mine, value)
+        if merged != mine:
+            element._set_attribute(name, merged)
 
 
 def global_options(model: RootElement) -> dict:
@@ -144,7 +174,7 @@ def _collect_options(element: Element, path: tuple, options: dict) -> None:
 def _check_global_options(parent: RootElement, child: RootElement) -> None:
     mine = global_options(parent)
     for key, value in global_options(child).items():
-        if key not in mine:
+        if key not in mine or key in MERGED_OPTIONS:
             continue
         other = mine[key]
         same = (

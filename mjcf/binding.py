@@ -147,7 +147,42 @@ class Binding:
     fields with labelled columns (xyz, quaternions, rgba, rotation matrices), by column.
     """
 
-    def __init__(self, sim, layout: ModelLayout, family: Family, ids, single: bool, label: str):
+    def __new__(cls, physics, namespace: str, named_index):
+        family = field_layout.FAMILIES.get(namespace)
+        if family is None:
+            raise ValueError(
+                f"elements of namespace {namespace!r} cannot be bound to physics; namespaces "
+                f"with MuJoCo fields: {', '.join(sorted(field_layout.FAMILIES))}"
+            )
+        return object.__new__(_binding_class(family))
+
+    def __init__(self, physics, namespace: str, named_index):
+        """Binds the objects of ``namespace`` named ``named_index`` (a name, or a list of
+        names, as in the compiled model) in ``physics``; ``physics.bind`` is the usual way.
+
+        Raises:
+          ValueError: no MuJoCo fields for ``namespace``, or no object of that name.
+        """
+        family = field_layout.FAMILIES[namespace]
+        layout = physics._layout
+        single = isinstance(named_index, str)
+        names = [named_index] if single else list(named_index)
+        ids = []
+        for name in names:
+            object_id = layout.object_id(family, name)
+            if object_id < 0:
+                raise ValueError(f"the model has no {namespace} named {name!r}")
+            ids.append(object_id)
+        label = f"<{namespace} name={named_index!r}>" if single else f"[{len(ids)} {namespace}]"
+        self._setup(physics._sim, layout, family, ids[0] if single else tuple(ids), single, label)
+
+    @classmethod
+    def _from_ids(cls, sim, layout: ModelLayout, family: Family, ids, single: bool, label: str):
+        binding = object.__new__(cls)
+        binding._setup(sim, layout, family, ids, single, label)
+        return binding
+
+    def _setup(self, sim, layout: ModelLayout, family: Family, ids, single: bool, label: str):
         self.__dict__.update(
             _sim=sim,
             _layout=layout,
@@ -281,10 +316,20 @@ class Binding:
                     sim.forward()
                 return view
 
-        def write(value):
-            array[index] = value
-            if after_write is not None:
+        if is_input:
+
+            def write(value):
+                array[index] = value
                 after_write()
+
+        else:
+
+            def write(value):
+                # Bring derived quantities up to date first, so that a later recompute
+                # does not overwrite the value written.
+                if sim.dirty:
+                    sim.forward()
+                array[index] = value
 
         read.constant = constant
         self._getters[name] = read
@@ -399,14 +444,27 @@ def create(sim, layout: ModelLayout, root, elements, single: bool) -> Binding:
                 f"cannot bind elements of different kinds together: {describe(first)} is a "
                 f"{namespace}, {describe(element)} is a {element_ns}"
             )
+        elif element_ns == "body" and _is_mocap(element) != _is_mocap(first):
+            # Mocap bodies have fields (mocap_pos, mocap_quat) that other bodies lack.
+            mocap, other = (element, first) if _is_mocap(element) else (first, element)
+            raise ValueError(
+                f"cannot bind mocap and other bodies together: {describe(mocap)} is a mocap "
+                f"body, {describe(other)} is not"
+            )
     family = field_layout.FAMILIES.get(namespace)
     if family is None:
         raise ValueError(f"cannot bind {describe(members[0])}: no MuJoCo fields for {namespace!r}")
     ids = tuple(_object_id(layout, family, root, element) for element in members)
     if single:
-        return _binding_class(family)(sim, layout, family, ids[0], True, describe(elements))
+        return _binding_class(family)._from_ids(
+            sim, layout, family, ids[0], True, describe(elements)
+        )
     label = f"{len(ids)} {namespace} elements" if len(ids) != 1 else describe(members[0])
-    return _binding_class(family)(sim, layout, family, ids, False, f"[{label}]")
+    return _binding_class(family)._from_ids(sim, layout, family, ids, False, f"[{label}]")
+
+
+def _is_mocap(element) -> bool:
+    return getattr(element, "mocap", None) == "true"
 
 
 _BINDING_CLASSES = {}
@@ -423,13 +481,9 @@ def _binding_class(family: Family) -> type:
 
 
 def _object_id(layout: ModelLayout, family: Family, root, element) -> int:
-    if element.tag == "worldbody":
-        if root is not None and element.root is not root:
-            raise ValueError(
-                f"cannot bind {describe(element)}: the worldbody of an attached model has no "
-                "body of its own; bind its attachment frame (mjcf.get_attachment_frame(model))"
-            )
+    if element.tag == "worldbody" and (root is None or element.root is root):
         return 0
+    # An attached model's worldbody is named after (and compiles to) its attachment frame.
     name = element.full_identifier
     if root is not None and not _belongs(root, element, family.namespace, name):
         hint = ""

@@ -5,7 +5,9 @@ from __future__ import annotations
 import difflib
 import os
 
-from mjcf import attribute_types, constants, element_list, schema, scoped_lookup
+import numpy as np
+
+from mjcf import attribute_array, attribute_types, constants, element_list, schema, scoped_lookup
 from mjcf.asset import Asset
 from mjcf.namescope import UNNAMED_MODEL, NameScope
 
@@ -13,6 +15,12 @@ _SEP = constants.PREFIX_SEPARATOR
 # Sets a private slot without going through Element.__setattr__ (which handles XML attributes).
 _set_slot = object.__setattr__
 _ESCAPED_SEP = constants.PREFIX_SEPARATOR_ESCAPE + constants.PREFIX_SEPARATOR
+# Single children that exist only once added (reading them gives None until then), as in
+# dm_control; every other single child exists from the start (created on first access here).
+_ON_DEMAND = frozenset(("inertial", "freejoint"))
+# The world body's identifier in the compiled model (an attached model's world body is its
+# attachment frame, named by the model's scope prefix).
+_WORLD = "world"
 
 # Which compiler attribute names the directory of each file-bearing element's files.
 _ASSET_DIRECTORY = {
@@ -60,9 +68,12 @@ class Element:
     Elements are created by `parent.add(tag, **attributes)` (or by parsing XML), never
     directly. XML attributes are Python attributes: `geom.size` is a NumPy array (None when
     unset), `geom.size = [0.1]` validates and sets it, `geom.size = None` or `del geom.size`
-    unsets it; the XML `class` attribute is `dclass`. Children that may appear at most once
-    are attributes too (`body.inertial`, `root.worldbody`, created on first access);
-    repeated children are listed by tag (`body.geom[0]`, `body.geom['name']`).
+    unsets it; the XML `class` attribute is `dclass`. Array values may also be written in
+    place (`geom.rgba[3] = 0.5`; see `mjcf.attribute_array`). Children that may appear at
+    most once are attributes too: sections and settings (`root.worldbody`, `root.option`)
+    always exist (created on first access), while `body.inertial` and `body.freejoint` are
+    None until added. Repeated children are listed by tag (`body.geom[0]`,
+    `body.geom['name']`).
 
     Identifiers (`name`, and `class` of a default) are unique per namespace within a model.
     Reference attributes (e.g. an actuator's `joint`) take an element or its identifier;
@@ -82,6 +93,9 @@ class Element:
         "_removed",
         "__weakref__",
     )
+
+    # Whether this element is an attachment frame, whose joints are named after it.
+    _holds_frame_children = False
 
     def __init__(self, *args, **kwargs):
         raise TypeError(
@@ -143,19 +157,28 @@ class Element:
         return self.prefixed_identifier(self._root.root_model)
 
     def prefixed_identifier(self, prefix_root=None) -> str | None:
-        """This element's identifier as seen from model `prefix_root` (None: its own model)."""
-        if self._spec.identifier is None:
+        """This element's identifier as seen from model `prefix_root` (None: its own model).
+
+        The world body is 'world' in its own model and the scope prefix ('arm/', naming the
+        attachment frame) when seen from a model it is attached below.
+        """
+        if self._spec.identifier is None and self._spec.name != constants.WORLDBODY:
             return None
         return self._scoped_name(self._root._namescope.full_prefix(prefix_root))
 
     def _scoped_name(self, prefix: str) -> str:
         """This element's identifier when its model's scope prefix is `prefix`."""
+        if self._spec.name == constants.WORLDBODY:
+            return prefix or _WORLD
         if self._spec.identifier == "class":
             if self._parent is self._root:
                 return prefix or _SEP
             return prefix + self._attributes["class"]
         name = self._attributes.get("name")
         if name is not None:
+            parent = self._parent
+            if parent is not None and parent._holds_frame_children:
+                return parent._scoped_name(prefix) + name + _SEP
             return prefix + name
         return self._generated_name(prefix)
 
@@ -194,15 +217,20 @@ class Element:
     def __getattr__(self, name: str):
         if name.startswith("_"):
             raise AttributeError(name)
+        if name in _CLASS_ATTRIBUTES:
+            # A property of the class raised AttributeError: let that error through instead
+            # of reporting an unknown attribute.
+            return object.__getattribute__(self, name)
         spec = self._spec
         attribute = spec.python_attributes.get(name)
         if attribute is not None:
-            return self._attributes.get(attribute.name)
+            value = self._attributes.get(attribute.name)
+            if isinstance(value, np.ndarray):
+                return self._writable_array(attribute.name, value)
+            return value
         child_spec = self._allowed_children().get(name)
         if child_spec is not None:
-            if child_spec.repeated:
-                return element_list.ElementList(self, name)
-            return self._singleton(child_spec)
+            return self._child_view(child_spec)
         raise _UnknownAttributeError(self, name)
 
     def __setattr__(self, name: str, value) -> None:
@@ -213,8 +241,20 @@ class Element:
         self._changed()
 
     def __delattr__(self, name: str) -> None:
+        """Unsets an attribute, or removes a single child (`del root.option`)."""
         if name.startswith("_"):
             object.__delattr__(self, name)
+            return
+        child_spec = self._allowed_children().get(name)
+        if child_spec is not None and name not in self._spec.python_attributes:
+            if child_spec.repeated:
+                raise AttributeError(
+                    f"{self._describe()}.{name} lists several children and cannot be "
+                    f"deleted; use {name}.clear() to remove them all"
+                )
+            child = self._singleton_if_present(name)
+            if child is not None:
+                child.remove()
             return
         self._set_attribute(name, None)
         self._changed()
@@ -232,13 +272,53 @@ class Element:
     def get_attributes(self) -> dict:
         """All set attributes, keyed by Python name (`dclass` for `class`)."""
         attributes = self._spec.attributes
-        return {attributes[k].python_name: v for k, v in self._attributes.items()}
+        return {
+            attributes[k].python_name: (
+                self._writable_array(k, v) if isinstance(v, np.ndarray) else v
+            )
+            for k, v in list(self._attributes.items())
+        }
+
+    def _writable_array(self, xml_name: str, value: np.ndarray) -> np.ndarray:
+        """The array stored for `xml_name`, made writable in place (see `attribute_array`)."""
+        if getattr(value, "_owner", None) is self:
+            return value
+        if self._removed:
+            return value
+        value = attribute_array.owned(value, self, xml_name)
+        self._attributes[xml_name] = value
+        return value
+
+    def _array_written(self, xml_name: str, array: np.ndarray) -> None:
+        """Called after `array`, this element's value of `xml_name`, was written in place."""
+        if self._attributes.get(xml_name) is not array:
+            return
+        spec = self._spec.attributes[xml_name]
+        if xml_name in self._texts:
+            self._texts[xml_name] = attribute_types.xml_text(xml_name, spec.type, array)
+        _set_slot(self, "_xml_cache", None)
+        self._changed()
 
     def set_attributes(self, **attributes) -> None:
-        """Sets several attributes at once; a value of None unsets that attribute."""
-        for name, value in attributes.items():
-            self._set_attribute(name, value)
-        self._changed()
+        """Sets several attributes at once; a value of None unsets that attribute.
+
+        All or nothing: when one value is rejected, the attributes already set by this call
+        get their previous values back before the error propagates.
+        """
+        done = []
+        try:
+            for name, value in attributes.items():
+                spec = self._spec.python_attributes.get(name)
+                previous = self._attributes.get(spec.name) if spec is not None else None
+                self._set_attribute(name, value)
+                done.append((name, previous))
+        except (ValueError, TypeError, AttributeError, FileNotFoundError):
+            for name, previous in reversed(done):
+                self._set_attribute(name, attribute_array.frozen(previous))
+            raise
+        finally:
+            if done:
+                self._changed()
 
     def get_attribute_xml_string(self, attribute_name: str, prefix_root=None) -> str | None:
         """The attribute's value as it is written to XML, or None when unset."""
@@ -263,7 +343,7 @@ class Element:
             self._texts.pop(xml_name, None)
             old = self._attributes.pop(xml_name, None)
             if kind == attribute_types.IDENTIFIER and old is not None:
-                self._root._namescope.remove(registry_namespace(self._spec), old)
+                self._root._namescope.remove(self._registry_namespace(), old)
             _set_slot(self, "_xml_cache", None)
             return
         try:
@@ -293,7 +373,7 @@ class Element:
                 f"{_SEP!r}, which separates model scopes (parse with escape_separators=True "
                 "to keep such names)"
             )
-        namespace = registry_namespace(self._spec)
+        namespace = self._registry_namespace()
         old = self._attributes.get(xml_name)
         if old == identifier:
             return
@@ -335,7 +415,7 @@ class Element:
             if not directory:
                 directory = compiler._attributes.get("assetdir") or ""
         stem, extension = os.path.splitext(os.path.basename(path))
-        for key in (path, os.path.join(directory, path) if directory else None):
+        for key in (path, os.path.normpath(os.path.join(directory, path)) if directory else None):
             if key is not None and key in scope.assets:
                 return Asset(scope.assets[key], extension, stem)
         full_path = path
@@ -362,6 +442,15 @@ class Element:
                 return child
         return None
 
+    def _child_view(self, child_spec: schema.ElementSpec):
+        """The list of children with a repeated tag, or the single child (None for an
+        on-demand child not yet added)."""
+        if child_spec.repeated:
+            return element_list.ElementList(self, child_spec.name)
+        if child_spec.name in _ON_DEMAND:
+            return self._singleton_if_present(child_spec.name)
+        return self._singleton(child_spec)
+
     def _singleton(self, child_spec: schema.ElementSpec) -> Element:
         existing = self._singleton_if_present(child_spec.name)
         if existing is not None:
@@ -386,15 +475,13 @@ class Element:
                 f"{_close_matches(element_name, self._allowed_children())}; allowed: "
                 f"{', '.join(sorted(self._allowed_children()))}"
             )
-        if not child_spec.repeated:
-            existing = self._singleton_if_present(element_name)
-            if existing is not None:
-                if existing._attributes or existing._children:
-                    raise ValueError(
-                        f"{self._describe()} already has a <{element_name}> child; access it "
-                        f"as .{element_name}"
-                    )
-                self._children.remove(existing)
+        if not child_spec.repeated and (
+            element_name not in _ON_DEMAND or self._singleton_if_present(element_name)
+        ):
+            raise ValueError(
+                f"{self._describe()}: a <{element_name}> child already exists (there can be "
+                f"only one); access it as .{element_name}"
+            )
         child = Element._create(child_spec, None, self._root)
         for name, value in attributes.items():
             child._set_attribute(name, value)
@@ -412,10 +499,22 @@ class Element:
         value = self._attributes.get(identifier_attr)
         if value is None:
             return None
-        namespace = registry_namespace(self._spec)
+        namespace = self._registry_namespace()
         if namespace == constants.DEFAULT and self._parent is self._root:
             return None
         return namespace, value
+
+    def _registry_namespace(self) -> str | None:
+        """Namespace this element's identifier is registered under in its model.
+
+        The joints of an attachment frame are named after the frame ('arm/' + 'x' + '/'),
+        so their identifiers only need to be unique per frame: each frame has its own.
+        """
+        namespace = registry_namespace(self._spec)
+        parent = self._parent
+        if parent is not None and parent._holds_frame_children:
+            return f"{namespace}{constants.NAMESPACE_SEPARATOR}frame{id(parent)}"
+        return namespace
 
     def _register_identifiers(self) -> None:
         """Registers identifiers of this subtree; on a clash, leaves nothing registered."""
@@ -440,14 +539,72 @@ class Element:
             stack.extend(reversed(element._children))
 
     def remove(self, affect_attachments: bool = False) -> None:
-        """Removes this element (and its subtree) from the model."""
-        del affect_attachments
+        """Removes this element (and its subtree) from the model.
+
+        A single child that always exists (`root.option`, `root.visual.quality`) is emptied
+        instead: its attributes are unset and its children removed. The global sections of
+        a model (`option`, `contact`, ...) stand for those of every model attached below it
+        as well, so emptying one of them needs `affect_attachments=True`, which empties the
+        same section of the attached models too.
+
+        Raises:
+          ValueError: the element is not part of a model, or it is a global section of a
+            model with attachments and `affect_attachments` is False.
+        """
         parent = self._parent
         if parent is None or self._removed:
             raise ValueError(f"{self._describe()} is not part of a model, so cannot be removed")
+        if self._spec.repeated or self._spec.name in _ON_DEMAND:
+            self._detach()
+            return
+        path = self._section_path()
+        if path is not None and self._root._frames:
+            if not affect_attachments:
+                raise ValueError(
+                    f"{self._describe()} of model {self._root._namescope.name!r} also "
+                    "stands for that of the models attached to it; use "
+                    "remove(affect_attachments=True) to empty it in all of them"
+                )
+            for frame in self._root._frames:
+                counterpart = frame._attached
+                for tag in path:
+                    counterpart = counterpart._singleton_if_present(tag)
+                    if counterpart is None:
+                        break
+                if counterpart is not None:
+                    counterpart.remove(affect_attachments=True)
+        self._empty()
+
+    def _section_path(self) -> list[str] | None:
+        """Tags from the root down to this element when all of them are single children
+        (a global section or a part of one), else None."""
+        path = []
+        element = self
+        while element._parent is not None:
+            if element._spec.repeated:
+                return None
+            path.append(element._spec.name)
+            element = element._parent
+        path.reverse()
+        return path
+
+    def _empty(self) -> None:
+        """Unsets every attribute and removes every child, keeping this element."""
+        for name in list(self._attributes):
+            self._set_attribute(self._spec.attributes[name].python_name, None)
+        for child in list(self._children):
+            if child._spec.repeated or child._spec.name in _ON_DEMAND:
+                child._detach()
+            else:
+                child._empty()
+        self._changed()
+
+    def _detach(self) -> None:
+        """Takes this element and its subtree out of the model."""
+        parent = self._parent
         for element in self._iter_own_tree():
             entry = element._identifier_entry()
-            if entry is not None and element._root._namescope.get(*entry) is element:
+            if entry is not None and element._root._namescope.find(*entry) is element:
                 element._root._namescope.remove(*entry)
             if element._auto_id is not None:
                 element._root._namescope.remove_unnamed(element._spec.namespace, element._auto_id)
@@ -470,13 +627,77 @@ class Element:
                 f"{self._describe()} has no child tag {element_name!r}"
                 f"{_close_matches(element_name, self._allowed_children())}"
             )
-        if child_spec.repeated:
-            return element_list.ElementList(self, element_name)
-        return self._singleton(child_spec)
+        return self._child_view(child_spec)
 
     def all_children(self) -> list[Element]:
-        """All children in order (attachment frames included, attached models' elements not)."""
-        return list(self._children)
+        """All children in order, attachment frames included.
+
+        As in dm_control, a top-level section (`root.actuator`, `root.asset`, ...) also
+        lists the repeated elements of the same section of each attached model, and an
+        attachment frame the elements of its attached model's worldbody.
+        """
+        children = list(self._children)
+        root = self._root
+        if (
+            self._parent is root
+            and root._frames
+            and self._spec.name not in (constants.WORLDBODY, constants.DEFAULT)
+        ):
+            for frame in root._frames:
+                section = frame._attached._singleton_if_present(self._spec.name)
+                if section is not None:
+                    children += [c for c in section.all_children() if c._spec.repeated]
+        return children
+
+    # ------------------------------------------------------------------------ sameness
+
+    def is_same_as(self, other) -> bool:
+        """Whether `other` describes the same thing: the same kind of element with equal
+        attributes and, recursively, equivalent children.
+
+        Children are compared tag by tag in order (a body's geoms against the other's geoms,
+        its sites against its sites), except in a tendon, whose path is its children in
+        order. A single child that was never set up equals an empty one. References are
+        compared by the identifier they name; a model's own name does not count. Meant for
+        tests: equivalent models may still order `ctrl` differently when compiled.
+        """
+        if not isinstance(other, Element) or other._spec is not self._spec:
+            return False
+        if not self._same_attributes(other):
+            return False
+        attached = getattr(self, "_attached", None)
+        if attached is not None and not attached.is_same_as(getattr(other, "_attached", None)):
+            return False
+        mine = [c for c in self._children if _is_set(c)]
+        theirs = [c for c in other._children if _is_set(c)]
+        parent = self._parent
+        if parent is not None and parent._spec.name == constants.TENDON:
+            return len(mine) == len(theirs) and all(
+                a.is_same_as(b) for a, b in zip(mine, theirs, strict=True)
+            )
+        tags = dict.fromkeys(c._spec.name for c in mine + theirs)
+        for tag in tags:
+            group = [c for c in mine if c._spec.name == tag]
+            other_group = [c for c in theirs if c._spec.name == tag]
+            if len(group) != len(other_group):
+                return False
+            if not all(a.is_same_as(b) for a, b in zip(group, other_group, strict=True)):
+                return False
+        return True
+
+    def _same_attributes(self, other: Element) -> bool:
+        names = set(self._attributes) | set(other._attributes)
+        if isinstance(self, RootElement):
+            names.discard("model")
+        for name in names:
+            mine = _comparable(self._attributes.get(name))
+            theirs = _comparable(other._attributes.get(name))
+            if isinstance(mine, np.ndarray) or isinstance(theirs, np.ndarray):
+                if mine is None or theirs is None or not np.array_equal(mine, theirs):
+                    return False
+            elif mine != theirs:
+                return False
+        return True
 
     # ---------------------------------------------------------------------------- search
 
@@ -486,8 +707,7 @@ class Element:
         `identifier` may be scoped into attached models, e.g. 'arm/hand/pinch_site'.
         Returns None when there is no such element.
         """
-        if namespace == "keyframe":
-            namespace = "key"
+        namespace = _checked_namespace(namespace)
         found = scoped_lookup.lookup(self._root, namespace, identifier)
         if found is None or self is self._root:
             return found
@@ -522,8 +742,7 @@ class Element:
         separately). Attachment frames count as bodies and are found under the
         'attachment_frame' namespace.
         """
-        if namespace == "keyframe":
-            namespace = "key"
+        namespace = _checked_namespace(namespace)
         found = []
         if immediate_children_only:
             for child in self._children:
@@ -580,17 +799,33 @@ class Element:
     def to_xml_string(
         self,
         prefix_root=None,
-        self_close: bool = True,
+        self_only: bool = False,
         pretty_print: bool = True,
         debug_context=None,
         *,
         precision: int = 17,
         zero_threshold: float = 0,
+        self_close: bool = True,
     ) -> str:
-        """XML text of this element (for a RootElement: a complete, compilable model)."""
+        """XML text of this element (for a RootElement: a complete, compilable model).
+
+        Args:
+          prefix_root: the model (RootElement or its NameScope) identifiers are scoped
+            from; None: this element's own model.
+          self_only: write only this element's own tag, with '...' for its children and
+            without generated names (what `str(element)` shows).
+          pretty_print: indent and end lines; the text then ends with a newline.
+          debug_context: accepted for dm_control compatibility; unused.
+          precision: significant digits of floats; 17 writes the shortest exact form.
+          zero_threshold: floats smaller in magnitude are written as 0.
+          self_close: write empty elements as `<tag/>` rather than `<tag></tag>`.
+        """
         del debug_context
         from mjcf import xml_writer
 
+        if self_only:
+            text = xml_writer.short_string(self, prefix_root)
+            return text + "\n" if pretty_print else text
         return xml_writer.element_to_string(
             self, prefix_root, self_close, pretty_print, precision, zero_threshold
         )
@@ -624,6 +859,28 @@ class Element:
 
     def __deepcopy__(self, memo):
         return self.__copy__()
+
+
+def _is_set(element: Element) -> bool:
+    """Whether `element` says anything: single children that were never set up do not."""
+    if element._spec.repeated or element._spec.name in _ON_DEMAND or element._attributes:
+        return True
+    return any(_is_set(child) for child in element._children)
+
+
+def _comparable(value):
+    """An attribute value as `is_same_as` compares it: references by the name they give."""
+    if isinstance(value, Element):
+        return value.full_identifier
+    return value
+
+
+def _checked_namespace(namespace: str) -> str:
+    """`namespace` ('keyframe' spelled 'key'); a ValueError if no element has it."""
+    if namespace not in schema.namespaces():
+        suggestion = _close_matches(namespace, schema.namespaces())
+        raise ValueError(f"{namespace!r} is not a valid namespace{suggestion}")
+    return "key" if namespace == "keyframe" else namespace
 
 
 def _frame_of(element):
@@ -783,6 +1040,21 @@ class RootElement(Element):
     def remove(self, affect_attachments: bool = False) -> None:
         raise ValueError("the <mujoco> root element cannot be removed; use detach()")
 
+    def include_copy(self, other: RootElement, override_attributes: bool = False) -> None:
+        """Copies the contents of model `other` into this model (see
+        `mjcf.copier.include_copy`)."""
+        from mjcf import copier
+
+        copier.include_copy(self, other, override_attributes)
+
+    def resolve_references(self) -> None:
+        """Replaces identifier strings in reference attributes (an actuator's `joint`, a
+        geom's `material`) by the elements they name, where this model has such an element.
+        """
+        from mjcf import parser
+
+        parser.resolve_reference_strings(self)
+
     def __copy__(self):
         return self.__deepcopy__({})
 
@@ -790,3 +1062,12 @@ class RootElement(Element):
         from mjcf import copier
 
         return copier.copy_model(self)
+
+
+# Names of the properties of the element classes (see `Element.__getattr__`).
+_CLASS_ATTRIBUTES = frozenset(
+    name
+    for cls in (Element, RootElement)
+    for name, value in vars(cls).items()
+    if isinstance(value, property)
+)

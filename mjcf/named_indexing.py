@@ -26,12 +26,23 @@ class Axis:
 
     For rows, ``names`` holds one name per object of the field's family in id order ('' for
     unnamed objects), also when an object owns several rows (``qpos`` of a free joint).
+    ``convert_key_item(key)`` turns a key for this axis (a name, a list of names, or anything
+    NumPy accepts) into the NumPy index it selects, as the field indexer does.
     """
 
-    __slots__ = ("names",)
+    __slots__ = ("names", "_convert")
 
-    def __init__(self, names):
+    def __init__(self, names, convert=None):
         self.names = names
+        self._convert = convert
+
+    def convert_key_item(self, key_item):
+        """Returns the NumPy index ``key_item`` selects on this axis.
+
+        Raises:
+          KeyError: for a name this axis does not have.
+        """
+        return key_item if self._convert is None else self._convert(key_item)
 
     def __repr__(self):
         return f"Axis(names={self.names!r})"
@@ -49,6 +60,15 @@ class _Rows:
     def convert(self, key):
         if isinstance(key, str):
             return self._layout.single_index(self._rule, self._id(key))
+        if isinstance(key, np.ndarray) and key.ndim > 1 and key.size and _is_name(key.flat[0]):
+            # A grid of names (as np.ix_ makes): one row per name, in the grid's shape.
+            rows = self._layout.multi_index(self._rule, [self._id(name) for name in key.flat])
+            if rows.size != key.size:
+                raise IndexError(
+                    f"{self._field!r}: a {key.ndim}-D array of names needs objects with one "
+                    f"row each, but some of {key.ravel().tolist()} own several rows"
+                )
+            return rows.reshape(key.shape)
         if isinstance(key, (list, np.ndarray)) and len(key) and _is_name(key[0]):
             return self._layout.multi_index(self._rule, [self._id(name) for name in key])
         return key
@@ -138,11 +158,18 @@ class FieldIndexer:
     def axes(self) -> Axes:
         """``Axes(row, col)``: row labels (object names) and, for 2-D fields, column labels."""
         array = self.field
-        row = Axis(self._rows.names())
+        row = Axis(self._rows.names(), self._rows.convert)
         if array.ndim < 2:
             return Axes(row)
         columns = field_layout.column_names(self._name, array.shape[1])
-        return Axes(row, Axis(None if columns is None else list(columns)))
+        width = array.shape[1]
+        return Axes(
+            row,
+            Axis(
+                None if columns is None else list(columns),
+                lambda item: self._convert_column(item, width, 1),
+            ),
+        )
 
     def __len__(self):
         return len(self.field)
@@ -169,6 +196,9 @@ class FieldIndexer:
             return self._column_index(item, names)
         if isinstance(item, (list, tuple)) and item and isinstance(item[0], str):
             return [self._column_index(label, names) for label in item]
+        if isinstance(item, np.ndarray) and item.size and _is_name(item.flat[0]):
+            indices = [self._column_index(str(label), names) for label in item.flat]
+            return np.array(indices, dtype=np.intp).reshape(item.shape)
         return item
 
     def _column_index(self, label: str, names) -> int:

@@ -91,6 +91,17 @@ class NameScope:
         return constants.PREFIX_SEPARATOR.join(parts) + constants.PREFIX_SEPARATOR
 
     def get(self, namespace: str, identifier: str):
+        """Returns the element named `identifier` in `namespace` of this model.
+
+        Raises:
+          KeyError: no element of this model has that identifier in that namespace.
+        """
+        found = self._namespaces.get(namespace, {}).get(identifier)
+        if found is None:
+            raise KeyError(f"model {self.name!r} has no {namespace!r} element named {identifier!r}")
+        return found
+
+    def find(self, namespace: str, identifier: str):
         """Returns the element named `identifier` in `namespace` of this model, or None."""
         return self._namespaces.get(namespace, {}).get(identifier)
 

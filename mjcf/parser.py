@@ -5,6 +5,7 @@ from __future__ import annotations
 import math
 import os
 import re
+import zipfile
 
 import numpy as np
 from lxml import etree
@@ -60,10 +61,14 @@ def from_file(
     resolve_references: bool = True,
     assets: dict | None = None,
 ) -> RootElement:
-    """Parses MJCF from an open file object (see `from_xml_string` for the arguments)."""
-    return from_xml_string(
-        file_handle.read(), escape_separators, model_dir, resolve_references, assets
-    )
+    """Parses MJCF from an open file object, or a file name (see `from_xml_string` for the
+    arguments)."""
+    if isinstance(file_handle, (str, os.PathLike)):
+        with open(file_handle, "rb") as handle:
+            text = handle.read()
+    else:
+        text = file_handle.read()
+    return from_xml_string(text, escape_separators, model_dir, resolve_references, assets)
 
 
 def from_path(
@@ -77,6 +82,50 @@ def from_path(
         text = handle.read()
     return from_xml_string(
         text, escape_separators, os.path.dirname(path), resolve_references, assets
+    )
+
+
+def from_zip(
+    path,
+    model_file: str = "model.xml",
+    escape_separators: bool = False,
+    resolve_references: bool = True,
+) -> RootElement:
+    """Parses a model stored in a zip archive together with its assets.
+
+    The model is the archive's only `.xml` file, or the one named `model_file` when there
+    are several; the other files are its assets, named relative to the model's directory
+    (as `export_with_assets_as_zip` writes them).
+
+    Raises:
+      ValueError: `path` is not a zip archive, holds no XML file, or holds several and
+        none named `model_file`.
+    """
+    if not zipfile.is_zipfile(path):
+        raise ValueError(f"from_zip: {path!r} is not a zip archive")
+    with zipfile.ZipFile(path) as archive:
+        names = [n for n in archive.namelist() if not n.endswith("/")]
+        xml_files = [n for n in names if n.endswith(".xml")]
+        if not xml_files:
+            raise ValueError(f"from_zip: {path!r} holds no .xml file")
+        if len(xml_files) == 1:
+            model_path = xml_files[0]
+        elif model_file in xml_files:
+            model_path = model_file
+        else:
+            raise ValueError(
+                f"from_zip: {path!r} holds several .xml files ({', '.join(xml_files)}) and "
+                f"none is named {model_file!r}"
+            )
+        model_dir = os.path.dirname(model_path)
+        text = archive.read(model_path)
+        assets = {
+            os.path.relpath(name, model_dir): archive.read(name)
+            for name in names
+            if name != model_path
+        }
+    return from_xml_string(
+        text, escape_separators, resolve_references=resolve_references, assets=assets
     )
 
 
@@ -136,7 +185,7 @@ def _build(document, escape_separators, model_dir, resolve_references, assets) -
     if model_name:  # MuJoCo reads an empty model name as unset
         root.model = model_name
     if resolve_references:
-        _resolve_references(root)
+        resolve_reference_strings(root)
     root._modification_count = 0
     return root
 
@@ -261,7 +310,7 @@ def _checked_identifier(element: Element, name: str, value: str) -> str:
     return value
 
 
-def _resolve_references(root: RootElement) -> None:
+def resolve_reference_strings(root: RootElement) -> None:
     """Replaces identifier strings in reference attributes by the elements they name."""
     for element in root._iter_own_tree():
         attributes = element._spec.attributes

@@ -27,6 +27,9 @@ _MAX_QUOTED_XML = 500
 # The name under which MJB bytes are handed to MuJoCo in a one-file virtual file system.
 _MJB_NAME = "model.mjb"
 
+# dm_control's name for the binding class, which code may construct or check against.
+Binding = binding_module.Binding
+
 
 def _log_mujoco_warning(message: str) -> None:
     logging.warning("MuJoCo warning: %s", message)
@@ -184,6 +187,23 @@ class Physics:
         self._close_renderers()
         self._initialize(data, mjcf_model)
 
+    def reload_from_xml_string(self, xml_string: str, assets: dict | None = None) -> None:
+        """Recompiles this Physics from MJCF text, as ``from_xml_string`` would.
+
+        Earlier bindings are dropped; elements of the MJCF model this Physics was built
+        from (if any) still bind, by name, to the new model.
+        """
+        model = mujoco.MjModel.from_xml_string(xml_string, assets=assets)
+        self._close_renderers()
+        self._initialize(mujoco.MjData(model), self._mjcf_model)
+
+    def reload_from_xml_path(self, file_path: str) -> None:
+        """Recompiles this Physics from the MJCF file at ``file_path`` (see
+        ``reload_from_xml_string``)."""
+        model = mujoco.MjModel.from_xml_path(str(file_path))
+        self._close_renderers()
+        self._initialize(mujoco.MjData(model), self._mjcf_model)
+
     # Structures.
 
     @property
@@ -223,14 +243,15 @@ class Physics:
         equal sequence of elements, again returns the same object.
 
         Returns:
-          A ``Binding``; None for None; an empty binding for an empty sequence.
+          A ``Binding``; an empty binding for an empty sequence.
 
         Raises:
-          ValueError: if an element is not part of the model compiled into this Physics,
-            is not compiled into a MuJoCo object, or the elements are of mixed kinds.
+          ValueError: ``mjcf_elements`` is None, an element is not part of the model
+            compiled into this Physics or is not compiled into a MuJoCo object, or the
+            elements are of mixed kinds (mocap and other bodies count as different kinds).
         """
         if mjcf_elements is None:
-            return None
+            raise ValueError("bind expects an mjcf element or a sequence of them, got None")
         key = tuple(mjcf_elements) if type(mjcf_elements) is list else mjcf_elements
         try:
             return self._bindings[key]

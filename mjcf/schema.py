@@ -225,3 +225,11 @@ def _reachable(root: ElementSpec) -> list[ElementSpec]:
                 seen.add(id(child))
                 order.append(child)
     return order
+
+
+@functools.cache
+def namespaces() -> frozenset[str]:
+    """Every namespace `find` and `find_all` accept: the object families of the schema, plus
+    'default' (classes), 'attachment_frame' and 'keyframe' (another spelling of 'key')."""
+    found = {spec.namespace for spec in all_specs() if spec.namespace is not None}
+    return frozenset(found | {"default", "attachment_frame", "keyframe"})

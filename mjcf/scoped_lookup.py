@@ -11,6 +11,7 @@ if TYPE_CHECKING:
     from mjcf.element import Element, RootElement
 
 _SEP = constants.PREFIX_SEPARATOR
+_WORLD = "world"
 
 # Asset kinds that MuJoCo lets you reference by file name when they have no name.
 _NAMED_BY_FILE = ("mesh", "texture", "hfield", "skin")
@@ -41,6 +42,9 @@ def lookup(root: RootElement, namespace: str, identifier: str) -> Element | None
             return root._namescope.get_unnamed(namespace, unnamed)
         model = root._attached_model(head)
         if model is None:
+            if not rest and root._frame is not None:
+                # 'arm/x/': joint 'x' of the frame that holds model 'arm'.
+                return _frame_child(root._frame, namespace, head)
             return None
         if not rest and namespace in (constants.BODY, constants.ATTACHMENT_FRAME):
             return model._frame
@@ -53,10 +57,19 @@ def lookup(root: RootElement, namespace: str, identifier: str) -> Element | None
         return model._frame if model is not None else None
     if namespace == constants.DEFAULT and identifier == "main":
         return root.default
-    found = root._namescope.get(namespace, identifier)
+    found = root._namescope.find(namespace, identifier)
+    if found is None and namespace == constants.BODY and identifier == _WORLD:
+        return root.worldbody
     if found is None and namespace in _NAMED_BY_FILE:
         found = _unnamed_asset_by_file(root, namespace, identifier)
     return found
+
+
+def _frame_child(frame: Element, namespace: str, name: str) -> Element | None:
+    for child in frame._children:
+        if child._spec.namespace == namespace and child._attributes.get("name") == name:
+            return child
+    return None
 
 
 def _unnamed_asset_by_file(root: RootElement, namespace: str, stem: str) -> Element | None:

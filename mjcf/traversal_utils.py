@@ -2,7 +2,9 @@
 
 from __future__ import annotations
 
-from mjcf import constants
+import functools
+
+from mjcf import constants, schema
 from mjcf.element import Element, RootElement, registry_namespace
 
 
@@ -67,7 +69,18 @@ def commit_defaults(element: Element, attributes: list[str] | None = None) -> No
     classes set (optionally only those named in `attributes`) is copied onto it; the model
     then compiles the same without relying on `<default>`.
     """
-    _commit(element, None, attributes)
+    _commit(element, _inherited_childclass(element), attributes)
+
+
+def _inherited_childclass(element: Element):
+    """The `childclass` of `element`'s nearest ancestor that sets one, or None."""
+    parent = element._parent
+    while parent is not None:
+        childclass = parent._attributes.get("childclass")
+        if childclass is not None:
+            return childclass
+        parent = parent._parent
+    return None
 
 
 def _commit(element: Element, inherited, attributes) -> None:
@@ -80,25 +93,45 @@ def _commit(element: Element, inherited, attributes) -> None:
     if "class" in spec.attributes and registry_namespace(spec) != constants.DEFAULT:
         dclass = element._attributes.get("class", inherited)
         for default in _default_chain(element, dclass):
-            template = default._singleton_if_present(_default_tag(element))
-            if template is None:
-                continue
-            for name, value in template._attributes.items():
-                if attributes is not None and spec.attributes[name].python_name not in attributes:
-                    continue
-                if name not in element._attributes and name in spec.attributes:
-                    element._set_attribute(spec.attributes[name].python_name, value)
+            for tag in _default_tags(element):
+                _commit_template(element, default._singleton_if_present(tag), attributes)
     for child in element._children:
         _commit(child, inherited, attributes)
     element._changed()
 
 
-def _default_tag(element: Element) -> str:
-    """Tag under `<default>` that configures `element` (e.g. 'equality' for `<weld>`)."""
+def _commit_template(element: Element, template: Element | None, attributes) -> None:
+    """Copies onto `element` the attributes default `template` sets and `element` does not."""
+    if template is None:
+        return
+    spec = element._spec
+    for name, value in template._attributes.items():
+        if name not in spec.attributes:
+            continue
+        python_name = spec.attributes[name].python_name
+        if attributes is not None and python_name not in attributes:
+            continue
+        if name not in element._attributes:
+            element._set_attribute(python_name, value)
+
+
+def _default_tags(element: Element) -> tuple[str, ...]:
+    """Tags under `<default>` that configure `element`, in order of precedence: 'equality'
+    for `<weld>`, and for an actuator every actuator kind (MuJoCo keeps one actuator
+    default per class, which each kind's tag sets)."""
     parent = element._parent
     parent_tag = parent._spec.name if parent is not None else ""
-    if parent_tag in ("equality",):
-        return "equality"
+    if parent_tag == "equality":
+        return ("equality",)
     if parent_tag == "tendon":
-        return "tendon"
-    return element._spec.name
+        return ("tendon",)
+    if parent_tag == constants.ACTUATOR:
+        return _actuator_default_tags()
+    return (element._spec.name,)
+
+
+@functools.cache
+def _actuator_default_tags() -> tuple[str, ...]:
+    root = schema.root_spec()
+    in_defaults = root.children[constants.DEFAULT].children
+    return tuple(tag for tag in root.children[constants.ACTUATOR].children if tag in in_defaults)

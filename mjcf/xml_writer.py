@@ -18,10 +18,11 @@ defaults of one model never leak into another.
 
 from __future__ import annotations
 
-from mjcf import attribute_types, constants, schema, skin_file
+from mjcf import attribute_types, constants, schema, scoped_lookup, skin_file
 from mjcf.asset import Asset
 from mjcf.attachment import AttachmentFrame
 from mjcf.element import Element, RootElement
+from mjcf.option_merging import MERGED_OPTIONS
 
 _SEP = constants.PREFIX_SEPARATOR
 _STRING = attribute_types.STRING
@@ -39,6 +40,10 @@ _WORLD = "world"
 _NAMED_BY_USER = ("asset", "custom")
 _BODY = constants.BODY
 _TOP_ONLY_SECTIONS = ("statistic",)
+# Top-level sections whose element text is only the model's own: the world (attached models
+# hang below attachment frames), defaults (scoped per model) and the global settings.
+_NOT_SHARED = (constants.WORLDBODY, constants.DEFAULT, *_TOP_ONLY_SECTIONS)
+_NOT_SHARED += constants.GLOBAL_OPTION_SECTIONS
 # Element._xml_cache is (precision key, plain attribute text, stamp, scope prefix, inherited
 # class, opening tag, class the children inherit); the last five are None when only the plain
 # text is cached. Setting it bypasses Element.__setattr__, which handles XML attributes.
@@ -82,6 +87,7 @@ class _Writer:
         "visit",
         "caching",
         "assets",
+        "names",
     )
 
     def __init__(self, prefix_root, self_close, pretty, precision, zero_threshold, full):
@@ -117,6 +123,9 @@ class _Writer:
         self.caching = False
         # VFS filename -> contents of the file assets met by `fresh_element`, or None.
         self.assets: dict[str, bytes] | None = None
+        # Whether unnamed elements that compile to a named object get their generated name
+        # (all writes but the short form of `str(element)`).
+        self.names = True
 
     def indent(self, depth: int) -> str:
         return "  " * depth if self.pretty else ""
@@ -178,7 +187,7 @@ class _Writer:
                 if names is not None and value in names:
                     text = self.resolved[key] = _escape(self.prefix_of(root) + value)
                     return text
-            target = root.find(namespace, value)
+            target = scoped_lookup.lookup(root, namespace, value)
             if target is None:
                 if value == _WORLD and namespace == _BODY and not self.prefix_of(root):
                     # MuJoCo's name for the world body, which the top model may refer to.
@@ -267,26 +276,44 @@ class _Writer:
             static = self.static_text(element)
         # Attributes that are neither plain nor the name: references and files.
         scoped = len(attributes) - len(plain)
+        # Name first, then the class, as dm_control writes them; the joints of an
+        # attachment frame (named after the frame) write their name last.
+        name_text = ""
         if spec.identifier == "name":
             identifier = attributes.get("name")
             if identifier is not None:
                 scoped -= 1
-                head = f'<{tag} name="{_escape(prefix + identifier)}"{static}'
-            elif not self.full:
-                head = f"<{tag}{static}"
+                if type(element._parent) is AttachmentFrame:
+                    name_text = f' name="{_escape(element._scoped_name(prefix))}"'
+                else:
+                    name_text = f' name="{_escape(prefix + identifier)}"'
+            elif not self.names:
+                pass
             elif spec.namespace == _JOINT:
                 # An attachment frame's first unnamed joint is named after the frame.
-                head = f'<{tag} name="{element._generated_name(prefix)}"{static}'
+                name_text = f' name="{_escape(element._generated_name(prefix))}"'
             elif element._parent._spec.name in _NAMED_BY_USER and "file" not in attributes:
                 # MuJoCo decides whether such an element needs a name (a material does, a
                 # skybox texture does not); a generated one would hide its error.
-                head = f"<{tag}{static}"
+                pass
             else:
                 auto_id = element._auto_id or element._unnamed_id()
-                head = f'<{tag} name="{prefix or _SEP}{auto_id}"{static}'
+                name_text = f' name="{prefix or _SEP}{auto_id}"'
+        if name_text and type(element._parent) is not AttachmentFrame:
+            head = f"<{tag}{name_text}"
+            name_text = ""
         else:
-            head = f"<{tag}{static}"
-        has_class = False
+            head = f"<{tag}"
+        if spec.takes_class:
+            explicit = attributes.get("class")
+            if explicit is not None:
+                scoped -= 1
+                class_type = spec.attributes["class"].type
+                head += f' class="{self.resolve(element, "class", explicit, class_type)}"'
+            elif dclass is not None:
+                text = self.class_texts.get(dclass)
+                head += text if text is not None else self.class_text(dclass)
+        head += static
         if scoped:
             specs = spec.attributes
             resolved = self.resolved
@@ -297,7 +324,7 @@ class _Writer:
                 kind = value_type.kind
                 if kind == _REFERENCE:
                     if name == "class":
-                        has_class = True
+                        continue
                     text = None
                     if type(value) is str:
                         text = resolved.get((element._root, value_type, value))
@@ -312,9 +339,7 @@ class _Writer:
                             self.assets[filename] = value.contents
                         value = filename
                     head += f' {name}="{_escape(value)}"'
-        if dclass is not None and not has_class and spec.takes_class:
-            text = self.class_texts.get(dclass)
-            head += text if text is not None else self.class_text(dclass)
+        head += name_text
         inherited = dclass
         if spec.sets_childclass:
             childclass = attributes.get("childclass")
@@ -424,14 +449,13 @@ class _Writer:
         child_prefix = self.prefix_of(model)
         static = self.static_text(frame)
         out = self.out
-        out.append(f'{self.indent(depth)}<body name="{_escape(child_prefix)}"{static}>')
+        out.append(f'{self.indent(depth)}<body{static} name="{_escape(child_prefix)}">')
         out.append(self.newline())
         for child in frame._children:
             self.visit(child, depth + 1, own_prefix, dclass)
         world = model._singleton_if_present(constants.WORLDBODY)
         if world is not None:
-            child_class = (child_prefix or _SEP) if self.full else None
-            self.children(world, depth + 1, child_prefix, child_class)
+            self.children(world, depth + 1, child_prefix, child_prefix or _SEP)
         out.append(f"{self.indent(depth)}</body>{self.newline()}")
 
     def default_class(self, default: Element, depth: int, prefix: str, name: str) -> None:
@@ -462,11 +486,7 @@ class _Writer:
             if self.prefix_root is root:
                 # Gathered as get_assets would: skins scoped by prefixes relative to `root`.
                 self.assets = {}
-        models = _models_below(root)
-        for model in models:
-            self.prefixes[id(model)] = model._namescope.full_prefix(self.prefix_root)
-            # Section tag -> section, looked up once per tag per model below.
-            self.sections[id(model)] = {c._spec.name: c for c in reversed(model._children)}
+        models = self.scope_models(root)
         out = self.out
         name = root._attributes.get("model")
         out.append(f'<mujoco model="{_escape(name)}">' if name is not None else "<mujoco>")
@@ -474,9 +494,9 @@ class _Writer:
         for tag in schema.root_spec().children:
             if tag in constants.GLOBAL_OPTION_SECTIONS:
                 found = [self.sections[id(model)].get(tag) for model in models]
-                self.merged_singleton(tag, [s for s in found if s is not None], 1)
+                self.merged_singleton((tag,), [s for s in found if s is not None], 1)
             elif tag == constants.DEFAULT:
-                self.defaults(models)
+                self.defaults(models, 1)
             elif tag in _TOP_ONLY_SECTIONS:
                 section = root._singleton_if_present(tag)
                 if section is not None and (section._children or section._attributes):
@@ -496,7 +516,7 @@ class _Writer:
             if section is None:
                 continue
             prefix = self.prefixes[id(model)]
-            dclass = (prefix or _SEP) if self.full else None
+            dclass = prefix or _SEP
             self.kept(
                 section,
                 depth + 1,
@@ -513,30 +533,64 @@ class _Writer:
             return
         out.append(f"{self.indent(depth)}</{tag}>{self.newline()}")
 
-    def defaults(self, models) -> None:
+    def defaults(self, models, depth: int) -> None:
+        """Writes the `<default>` section: each model's global class, named after its scope
+        prefix, holding the model's classes."""
         out = self.out
-        out.append(f"{self.indent(1)}<default>{self.newline()}")
+        out.append(f"{self.indent(depth)}<default>{self.newline()}")
+        inner = depth + 1
         for model in models:
             prefix = self.prefixes[id(model)]
             default = self.sections[id(model)].get(constants.DEFAULT)
             if default is None:
-                out.append(f'{self.indent(2)}<default class="{_escape(prefix or _SEP)}"')
+                out.append(f'{self.indent(inner)}<default class="{_escape(prefix or _SEP)}"')
                 out.append(self.close("default"))
             else:
                 name = prefix or _SEP
-                self.kept(default, 2, prefix, name, self.default_class, default, 2, prefix, name)
-        out.append(f"{self.indent(1)}</default>{self.newline()}")
+                self.kept(
+                    default, inner, prefix, name, self.default_class, default, inner, prefix, name
+                )
+        out.append(f"{self.indent(depth)}</default>{self.newline()}")
 
-    def merged_singleton(self, tag: str, elements: list, depth: int) -> None:
-        """Writes same-tag singletons of several models as one; the first value set wins."""
+    def scope_models(self, root: RootElement) -> list[RootElement]:
+        """Notes the scope prefix and sections of `root` and every model attached below it
+        (see `model`); returns those models."""
+        models = _models_below(root)
+        for model in models:
+            self.prefixes[id(model)] = model._namescope.full_prefix(self.prefix_root)
+            # Section tag -> section, looked up once per tag per model below.
+            self.sections[id(model)] = {c._spec.name: c for c in reversed(model._children)}
+        return models
+
+    def shared_section(self, section: Element) -> None:
+        """Writes top-level `section` with the same section of every model attached below
+        its model, as the whole model's text has it."""
+        models = self.scope_models(section._root)
+        mark = len(self.out)
+        self.section(section._spec.name, models, 0)
+        if len(self.out) == mark:
+            tag = section._spec.name
+            self.out.append(f"<{tag}/>" if self.self_close else f"<{tag}></{tag}>")
+            self.out.append(self.newline())
+
+    def merged_singleton(self, path: tuple[str, ...], elements: list, depth: int) -> None:
+        """Writes the singletons at `path` of several models as one: the first value set
+        wins, except for options that combine (see `mjcf.option_merging`)."""
         if not elements:
             return
+        tag = path[-1]
         skip = constants.ASSET_DIRECTORY_ATTRIBUTES if tag == "compiler" else ()
         merged = {}
         for element in elements:
             for name, value in element._attributes.items():
-                if name not in skip and name not in merged:
+                if name in skip:
+                    continue
+                if name not in merged:
                     merged[name] = (element, value)
+                    continue
+                merge = MERGED_OPTIONS.get((path, name))
+                if merge is not None:
+                    merged[name] = (merged[name][0], merge(merged[name][1], value))
         parts = [f"{self.indent(depth)}<{tag}"]
         for name, (element, value) in merged.items():
             value_type = element._spec.attributes[name].type
@@ -556,7 +610,7 @@ class _Writer:
                     child_tags.append(child._spec.name)
         for child_tag in child_tags:
             children = [c for e in elements for c in e._children if c._spec.name == child_tag]
-            self.merged_singleton(child_tag, children, depth + 1)
+            self.merged_singleton(path + (child_tag,), children, depth + 1)
         if len(out) > mark + 2:
             out.append(f"{self.indent(depth)}</{tag}>{self.newline()}")
         elif merged:
@@ -610,41 +664,74 @@ def element_to_string(
         writer = _Writer(prefix_root, self_close, pretty_print, precision, zero_threshold, True)
         writer.model(element)
         text = "".join(writer.out)
-        text = text[:-1] if pretty_print and text.endswith("\n") else text
         element._xml_string_cache = (key, text)
         if writer.assets is not None:
             element._assets_cache = (element._files_count, writer.assets)
         return text
     else:
         writer = _Writer(prefix_root, self_close, pretty_print, precision, zero_threshold, False)
-        if element._spec.name == constants.DEFAULT and element._parent is not None:
+        if element._spec.name == constants.DEFAULT and element._parent is element._root:
+            # As in the whole model: the model's global class, then those of attached models.
+            writer.scope_models(element._root)
+            writer.defaults(_models_below(element._root), 0)
+        elif element._spec.name == constants.DEFAULT and element._parent is not None:
             prefix = writer.prefix_of(element._root)
-            name = prefix + element._attributes.get("class", "")
-            if element._parent is element._root and "class" not in element._attributes:
-                name = prefix or _SEP
-            writer.default_class(element, 0, prefix, name)
+            writer.default_class(element, 0, prefix, prefix + element._attributes.get("class", ""))
+        elif _is_shared_section(element):
+            writer.shared_section(element)
         else:
-            writer.element(element, 0, writer.prefix_of(element._root), None)
-    text = "".join(writer.out)
-    return text[:-1] if pretty_print and text.endswith("\n") else text
+            prefix = writer.prefix_of(element._root)
+            writer.element(element, 0, prefix, _inherited_class(writer, element, prefix))
+    return "".join(writer.out)
 
 
-def short_string(element: Element) -> str:
+def _is_shared_section(element: Element) -> bool:
+    """Whether `element` is a top-level section that stands for the same section of the
+    models attached below its model too (`root.actuator`, `root.contact`, ...)."""
+    root = element._root
+    return (
+        element._parent is root
+        and bool(root._frames)
+        and element._spec.name not in _NOT_SHARED
+        and bool(element._children or any(f._attached._children for f in root._frames))
+    )
+
+
+def _inherited_class(writer: _Writer, element: Element, prefix: str) -> str | None:
+    """The default class `element` inherits: its nearest `childclass`, else its model's
+    global class (none inside `<default>`)."""
+    parent = element._parent
+    while parent is not None:
+        spec = parent._spec
+        if spec.name == _DEFAULT:
+            return None
+        if spec.sets_childclass:
+            childclass = parent._attributes.get("childclass")
+            if childclass is not None:
+                value_type = spec.attributes["childclass"].type
+                return writer.resolve(parent, "childclass", childclass, value_type)
+        parent = parent._parent
+    return prefix or _SEP
+
+
+def short_string(element: Element, prefix_root=None) -> str:
     """The element's opening tag and attributes, with '...' standing for its children."""
-    writer = _Writer(element._root, True, False, 17, 0, False)
+    writer = _Writer(prefix_root or element._root, True, False, 17, 0, False)
     tag = element._spec.name
     if isinstance(element, RootElement):
         name = element._attributes.get("model")
         head = f'<mujoco model="{_escape(name)}"' if name is not None else "<mujoco"
     elif type(element) is AttachmentFrame:
         static = writer.static_text(element)
-        head = f'<body name="{_escape(element.prefixed_identifier(element._root))}"{static}'
+        head = f'<body{static} name="{_escape(element.prefixed_identifier(element._root))}"'
     elif tag == constants.DEFAULT:
         identifier = element._attributes.get("class")
         head = f'<default class="{_escape(identifier)}"' if identifier else "<default"
     else:
         writer.shallow = True
-        writer.element(element, 0, "", None)
+        writer.names = False
+        prefix = writer.prefix_of(element._root)
+        writer.element(element, 0, prefix, _inherited_class(writer, element, prefix))
         return "".join(writer.out)
     return f"{head}>...</{tag}>" if element._children else f"{head}/>"
 

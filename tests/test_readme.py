@@ -55,3 +55,12 @@ def test_video_example_writes_an_mp4_of_the_reset_frame_and_fifty_steps(tmp_path
         exec(compile(_section_code("Videos and the viewer"), str(README), "exec"), {})
     assert printed.getvalue().strip() == "51 25.0"
     assert iio.imread(tmp_path / "reach_site.mp4", index=None).shape == (51, 240, 320, 3)
+
+
+def test_gymnasium_example_makes_an_env_and_a_vector_env():
+    namespace = {}
+    exec(compile(_section_code("Use with Gymnasium"), str(README), "exec"), namespace)
+    assert namespace["frame"].shape == (480, 640, 3)
+    assert namespace["observations"]["duplo2x4/position"].shape == (4, 1, 3)
+    assert namespace["rewards"].shape == (4,)
+    assert namespace["envs"].closed

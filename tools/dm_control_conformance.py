@@ -1,10 +1,11 @@
-"""Runs dm_control 1.0.50's own composer/mjcf tests and manipulation suite on this project.
+"""Runs dm_control 1.0.50's own composer/mjcf/entities tests and manipulation suite here.
 
 Usage: ``python tools/dm_control_conformance.py [--floor 0.99] [--tasks-only | --tests-only]``
 
 Builds a scratch venv under ``.cache/dm_control_conformance`` with this project and
 ``dm-control==1.0.50`` installed from PyPI, copies dm_control's public ``composer`` and
-``mjcf`` test files out of that install (nothing of dm_control is kept in the repository),
+``mjcf`` test files, and those of the ``entities`` (props, arms, hands) that its manipulation
+suite is built from, out of that install (nothing of dm_control is kept in the repository),
 and runs them with ``dm_control.composer`` / ``dm_control.mjcf`` served by this project
 through ``composer.dm_control_compat``. Exception types are checked, message wording is not.
 It then loads every ``dm_control.manipulation`` ``*_features`` task and ``reach_site_vision``
@@ -31,6 +32,10 @@ CACHE = REPO / ".cache" / "dm_control_conformance"
 DM_CONTROL_VERSION = "1.0.50"
 TEST_EXTRAS = ["mock", "pytest"]
 
+#: dm_control packages whose test files are run: the two this project serves, and the
+#: entities built on them that dm_control's manipulation suite uses.
+TESTED_PACKAGES = ("composer", "mjcf", "entities")
+
 #: Test files that check dm_control's own internals (its copied schema, its attribute
 #: classes, its debug mode), not behaviour that users rely on.
 EXCLUDED_TEST_FILES = {
@@ -51,6 +56,7 @@ EPISODE_STEPS = 100
 
 _CONFTEST = '''
 """Written by tools/dm_control_conformance.py: redirect, helpers, wording not checked."""
+import importlib
 import importlib.util
 import sys
 import unittest
@@ -68,6 +74,9 @@ for _name, _relative in {helpers!r}.items():
     _module = importlib.util.module_from_spec(_spec)
     sys.modules[_name] = _module
     _spec.loader.exec_module(_module)
+    # `from dm_control.composer import hooks_test_utils` looks the name up on the package.
+    _parent, _, _child = _name.rpartition(".")
+    setattr(importlib.import_module(_parent), _child, _module)
 
 from absl import flags  # noqa: E402
 from absl.testing import absltest  # noqa: E402
@@ -144,7 +153,7 @@ def build_venv() -> Path:
 
 
 def copy_tests(python: Path) -> Path:
-    """Copies dm_control's composer/mjcf test files and their assets out of the venv."""
+    """Copies dm_control's composer/mjcf/entities test files and assets out of the venv."""
     location = subprocess.run(
         [
             str(python),
@@ -159,7 +168,7 @@ def copy_tests(python: Path) -> Path:
     source = Path(location)
     destination = CACHE / "tests"
     shutil.rmtree(destination, ignore_errors=True)
-    for package in ("composer", "mjcf"):
+    for package in TESTED_PACKAGES:
         for path in (source / package).rglob("*"):
             relative = path.relative_to(source).as_posix()
             is_test = path.name.endswith("_test.py") and relative not in EXCLUDED_TEST_FILES

@@ -13,6 +13,13 @@ from composer.environment import EpisodeInitializationError
 from composer.initializers import _kinematic_tree
 from composer.variation import base, rotations
 
+#: The message of a failed placement (dm_control's tests format it with these keys).
+_REJECTION_SAMPLING_FAILED = (
+    "PropPlacer: no non-penetrating pose found for prop {model_name!r} in {max_attempts} "
+    "attempts; sample from a wider region, raise max_attempts_per_prop or set "
+    "ignore_collisions=True"
+)
+
 
 class PropPlacer(initializer.Initializer):
     """Places props at sampled poses such that no prop penetrates anything.
@@ -181,9 +188,9 @@ class PropPlacer(initializer.Initializer):
             if not np.any(is_prop_geom[geom1] | is_prop_geom[geom2]):
                 return
         raise EpisodeInitializationError(
-            f"PropPlacer: no non-penetrating pose found for prop {prop.mjcf_model.model!r} in "
-            f"{self._max_attempts_per_prop} attempts; sample from a wider region, raise "
-            "max_attempts_per_prop or set ignore_collisions=True"
+            _REJECTION_SAMPLING_FAILED.format(
+                model_name=prop.mjcf_model.model, max_attempts=self._max_attempts_per_prop
+            )
         )
 
     def _settle(self, physics) -> bool:

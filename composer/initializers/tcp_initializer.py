@@ -17,6 +17,12 @@ DOWN_QUATERNION = np.array([0.0, np.sqrt(0.5), np.sqrt(0.5), 0.0])
 # Weight of the orientation error (radians) relative to the position error (metres) in IK.
 _IK_ROT_WEIGHT = 2.0
 
+#: The message when no pose works (dm_control's tests format it with these keys).
+_REJECTION_SAMPLING_FAILED = (
+    "ToolCenterPointInitializer: no collision-free IK solution after "
+    "{max_rejection_samples} sampled poses with up to {max_ik_attempts} IK attempts each"
+)
+
 _SCALAR_JOINTS = (int(mujoco.mjtJoint.mjJNT_HINGE), int(mujoco.mjtJoint.mjJNT_SLIDE))
 
 # Geom groups, and which pairs of them make a contact count as a collision: the arm with the
@@ -118,9 +124,11 @@ class ToolCenterPointInitializer(initializer.Initializer):
             data.qpos[joints.qpos] = initial_qpos
         physics.forward()
         raise EpisodeInitializationError(
-            f"ToolCenterPointInitializer: no collision-free IK solution for "
-            f"{site.full_identifier!r} after {self._max_rejection_samples} sampled poses with "
-            f"up to {self._max_ik_attempts} IK attempts each"
+            _REJECTION_SAMPLING_FAILED.format(
+                max_rejection_samples=self._max_rejection_samples,
+                max_ik_attempts=self._max_ik_attempts,
+            )
+            + f" (tool center point {site.full_identifier!r})"
         )
 
     def _geom_groups(self, model: mujoco.MjModel) -> np.ndarray:

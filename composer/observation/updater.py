@@ -204,8 +204,17 @@ class _EnabledObservable:
         return lambda current_time: aggregator(read(current_time))
 
     def spec(self) -> specs.Array:
+        """The observation's spec: the observable's own, renamed and buffered, if it has one.
+
+        Without an aggregator, an observable's `array_spec` (of whatever `specs.Array`
+        subclass) is kept, with this observation's name and buffered shape. With an
+        aggregator the spec is that of the aggregated value, bounded only when the
+        aggregator `preserves_bounds`.
+        """
         bounds = None
         array_spec = self.observable.array_spec
+        if array_spec is not None and self.aggregator is None:
+            return array_spec.replace(name=self.name, shape=self.buffer.shape)
         if isinstance(array_spec, specs.BoundedArray):
             bounds = (array_spec.minimum, array_spec.maximum)
         if self.aggregator is None:

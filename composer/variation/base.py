@@ -96,8 +96,30 @@ def evaluate(structure, *args, **kwargs):
     return structure
 
 
+def same_value(first, second) -> bool:
+    """Returns whether two variation parameters are equal, comparing arrays element-wise.
+
+    Lists, tuples and dicts are compared item by item, so that parameters holding NumPy
+    arrays compare as a whole instead of raising on an ambiguous truth value.
+    """
+    if isinstance(first, np.ndarray) or isinstance(second, np.ndarray):
+        first, second = np.asarray(first), np.asarray(second)
+        return first.shape == second.shape and bool(np.all(first == second))
+    if isinstance(first, (list, tuple)) and isinstance(second, (list, tuple)):
+        return (
+            type(first) is type(second)
+            and len(first) == len(second)
+            and all(same_value(a, b) for a, b in zip(first, second))
+        )
+    if isinstance(first, dict) and isinstance(second, dict):
+        return first.keys() == second.keys() and all(
+            same_value(first[key], second[key]) for key in first
+        )
+    return bool(first == second)
+
+
 class _UnaryOperation(Variation):
-    """`op(variation)`, evaluated lazily."""
+    """`op(variation)`, evaluated lazily; equal to another with the same op and operand."""
 
     def __init__(self, op, variation):
         self._op = op
@@ -106,12 +128,26 @@ class _UnaryOperation(Variation):
     def __call__(self, initial_value=None, current_value=None, random_state=None):
         return self._op(evaluate(self._variation, initial_value, current_value, random_state))
 
+    def __eq__(self, other):
+        if not isinstance(other, _UnaryOperation):
+            return NotImplemented
+        return self._op == other._op and same_value(self._variation, other._variation)
+
+    __hash__ = None
+
+    def __str__(self):
+        return f"{self._op.__name__}({self._variation})"
+
     def __repr__(self):
-        return f"{self._op.__name__}({self._variation!r})"
+        return f"UnaryOperation({self._op.__name__}({self._variation!r}))"
 
 
 class _BinaryOperation(Variation):
-    """`op(first, second)` where either operand may be a variation, evaluated lazily."""
+    """`op(first, second)` where either operand may be a variation, evaluated lazily.
+
+    Equal to another binary operation with the same op and equal operands, so the same
+    expression built twice compares equal.
+    """
 
     def __init__(self, op, first, second):
         self._op = op
@@ -123,12 +159,26 @@ class _BinaryOperation(Variation):
         second = evaluate(self._second, initial_value, current_value, random_state)
         return self._op(first, second)
 
+    def __eq__(self, other):
+        if not isinstance(other, _BinaryOperation):
+            return NotImplemented
+        return (
+            self._op == other._op
+            and same_value(self._first, other._first)
+            and same_value(self._second, other._second)
+        )
+
+    __hash__ = None
+
+    def __str__(self):
+        return f"{self._op.__name__}({self._first}, {self._second})"
+
     def __repr__(self):
-        return f"{self._op.__name__}({self._first!r}, {self._second!r})"
+        return f"BinaryOperation({self._op.__name__}({self._first!r}, {self._second!r}))"
 
 
 class _GetItemOperation(Variation):
-    """`variation[index]`, evaluated lazily."""
+    """`variation[index]`, evaluated lazily; equal to another with the same operand and index."""
 
     def __init__(self, variation, index):
         self._variation = variation
@@ -138,5 +188,17 @@ class _GetItemOperation(Variation):
         value = evaluate(self._variation, initial_value, current_value, random_state)
         return np.asarray(value)[self._index]
 
+    def __eq__(self, other):
+        if not isinstance(other, _GetItemOperation):
+            return NotImplemented
+        return same_value(self._variation, other._variation) and same_value(
+            self._index, other._index
+        )
+
+    __hash__ = None
+
+    def __str__(self):
+        return f"{self._variation}[{self._index}]"
+
     def __repr__(self):
-        return f"{self._variation!r}[{self._index!r}]"
+        return f"GetItemOperation({self._variation!r}[{self._index}])"

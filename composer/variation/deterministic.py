@@ -6,13 +6,23 @@ from composer.variation import base
 
 
 class Constant(base.Variation):
-    """Always returns `value`."""
+    """Always returns `value`; equal to another constant of an equal value."""
 
     def __init__(self, value):
         self._value = value
 
     def __call__(self, initial_value=None, current_value=None, random_state=None):
         return self._value
+
+    def __eq__(self, other):
+        if not isinstance(other, Constant):
+            return NotImplemented
+        return base.same_value(self._value, other._value)
+
+    __hash__ = None
+
+    def __str__(self):
+        return f"{self._value}"
 
     def __repr__(self):
         return f"Constant({self._value!r})"
@@ -37,7 +47,15 @@ class Sequence(base.Variation):
 
 
 class Identity(base.Variation):
-    """Returns the current value unchanged."""
+    """Returns the current value unchanged; all identities are equal."""
 
     def __call__(self, initial_value=None, current_value=None, random_state=None):
         return current_value
+
+    def __eq__(self, other):
+        return isinstance(other, Identity) or NotImplemented
+
+    __hash__ = None
+
+    def __repr__(self):
+        return "Identity()"

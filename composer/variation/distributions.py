@@ -105,9 +105,22 @@ class Distribution(base.Variation):
                 pass  # shapes do not broadcast: return the draw as it is, like dm_control
         return sample
 
+    def __eq__(self, other):
+        if type(other) is not type(self):
+            return NotImplemented
+        return (
+            self._single_sample == other._single_sample
+            and base.same_value(self._args, other._args)
+            and base.same_value(self._kwargs, other._kwargs)
+        )
+
+    __hash__ = None
+
     def __repr__(self):
-        kwargs = dict(self._kwargs, single_sample=True) if self._single_sample else self._kwargs
-        return _describe(type(self).__name__, self._args, kwargs)
+        return (
+            f"{type(self).__name__}(args={self._args!r}, kwargs={self._kwargs!r}, "
+            f"single_sample={self._single_sample!r})"
+        )
 
 
 class Uniform(Distribution):
@@ -253,6 +266,21 @@ class UniformPointOnSphere(base.Variation):
         points = _random_state(random_state).normal(size=size)
         return points / np.linalg.norm(points, axis=-1, keepdims=True)
 
+    def __eq__(self, other):
+        if not isinstance(other, UniformPointOnSphere):
+            return NotImplemented
+        return self._single_sample == other._single_sample
+
+    __hash__ = None
+
+    def __repr__(self):
+        return f"UniformPointOnSphere(single_sample={self._single_sample!r})"
+
+
+#: Message templates for BiasedRandomWalk's argument checks (dm_control's tests read them).
+_NEGATIVE_STDEV = "BiasedRandomWalk: stdev must be non-negative, got {!r}"
+_NEGATIVE_TIMESCALE = "BiasedRandomWalk: timescale must be non-negative, got {!r}"
+
 
 class BiasedRandomWalk(base.Variation):
     """Zero-mean Ornstein-Uhlenbeck noise: each call advances the process by one step.
@@ -264,9 +292,9 @@ class BiasedRandomWalk(base.Variation):
 
     def __init__(self, stdev: float = 0.1, timescale: float = 10.0):
         if stdev < 0:
-            raise ValueError(f"BiasedRandomWalk: stdev must be non-negative, got {stdev!r}")
+            raise ValueError(_NEGATIVE_STDEV.format(stdev))
         if timescale < 0:
-            raise ValueError(f"BiasedRandomWalk: timescale must be non-negative, got {timescale!r}")
+            raise ValueError(_NEGATIVE_TIMESCALE.format(timescale))
         self._retain = 0.0 if timescale == 0 else float(np.exp(-1.0 / timescale))
         self._scale = stdev * np.sqrt(1.0 - self._retain**2)
         self._value = 0.0

@@ -1,5 +1,6 @@
 """MJCF of a 6-DOF Jaco-style arm built from capsules and cylinders."""
 
+from composer.constants import SENSOR_SITES_GROUP
 from manipulation.models import constants as c
 from manipulation.models._xml import quat_about_axis, vec
 
@@ -60,7 +61,8 @@ def _link(index: int, pos: tuple[float, float, float], inner: str) -> str:
         f'<joint name="{JOINT_NAMES[index]}" type="hinge" axis="{vec(axis)}"{limits} '
         f'ref="{home:.6g}" '
         f'armature="{c.ARM_ARMATURE[index]:.6g}" damping="{c.ARM_DAMPING:.6g}"/>'
-        f'<site name="{TORQUE_SITE_NAMES[index]}" size="0.005" group="4" rgba="1 0 0 0.5"/>'
+        f'<site name="{TORQUE_SITE_NAMES[index]}" size="0.005" '
+        f'group="{SENSOR_SITES_GROUP}" rgba="1 0 0 0.5"/>'
         f'<geom name="{name}_geom" type="capsule" fromto="{vec(start + end)}" '
         f'size="{radius:.6g}" mass="{c.LINK_MASSES[index]:.6g}" rgba="{_LINK_RGBA}" '
         f"{_COLLIDE}/>"

@@ -8,6 +8,7 @@ import itertools
 import math
 from collections.abc import Sequence
 
+from composer.constants import SENSOR_SITES_GROUP
 from manipulation.models import constants as c
 from manipulation.models._xml import check_name, check_positive, check_rgba, vec
 
@@ -148,7 +149,7 @@ def pedestal_xml(name: str = "pedestal") -> str:
         f'<mujoco model="{name}"><worldbody>'
         f'<geom name="column" type="cylinder" size="{c.PEDESTAL_RADIUS:.6g} {half_height:.6g}" '
         f'pos="0 0 {-half_height:.6g}" rgba="0.55 0.5 0.45 1"/>'
-        '<site name="cradle_site" type="sphere" size="0.003" group="4"/>'
+        f'<site name="cradle_site" type="sphere" size="0.003" group="{SENSOR_SITES_GROUP}"/>'
         f'<site name="target" type="sphere" size="{c.TARGET_RADIUS:.6g}" {_SITE}/>'
         "</worldbody></mujoco>"
     )

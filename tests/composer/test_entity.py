@@ -103,6 +103,21 @@ def test_root_body_is_worldbody_when_unattached_and_frame_when_attached():
     assert box.root_body is frame
 
 
+def test_model_attached_with_mjcf_directly_is_carried_by_its_frame():
+    arena, box = Floor(), Box()
+    site = arena.mjcf_model.worldbody.add("site", name="mount", xyaxes=[0, 1, 0, -1, 0, 0])
+    frame = site.attach(box.mjcf_model)
+    assert box.root_body is frame
+    physics = _compiled(arena)
+    # The frame's x axis is the world's y axis, its y axis the world's -x axis.
+    np.testing.assert_allclose(
+        box.global_vector_to_local_frame(physics, [0, 1, 0]), [1, 0, 0], atol=1e-12
+    )
+    np.testing.assert_allclose(
+        box.global_vector_to_local_frame(physics, [-1, 0]), [0, 1], atol=1e-12
+    )
+
+
 def test_create_root_joints_adds_a_free_joint():
     arena, box = Floor(), Box()
     frame = arena.attach(box)
@@ -118,6 +133,14 @@ def test_set_pose_of_free_entity_writes_its_joint_qpos():
     physics.forward()
     np.testing.assert_allclose(physics.bind(box.root_body).xpos, [0.1, 0.2, 0.3])
     np.testing.assert_allclose(physics.bind(box.root_body).xquat, _quat_about_z(0.5))
+
+
+def test_set_pose_of_free_entity_normalises_the_quaternion():
+    arena, box = Floor(), Box()
+    arena.add_free_entity(box)
+    physics = _compiled(arena)
+    box.set_pose(physics, quaternion=[2.0, 0.0, 0.0, 2.0])
+    np.testing.assert_allclose(box.get_pose(physics)[1], [0.5**0.5, 0, 0, 0.5**0.5])
 
 
 def test_get_pose_of_free_entity_reads_its_joint_qpos():
@@ -245,3 +268,29 @@ def test_free_prop_observables_report_pose_and_velocity_of_the_body():
     np.testing.assert_allclose(value("orientation"), _quat_about_z(0.4))
     np.testing.assert_allclose(value("linear_velocity"), [0.5, 0, 0], atol=1e-12)
     np.testing.assert_allclose(value("angular_velocity"), [0, 0, 1.5], atol=1e-12)
+
+
+def test_configure_joints_sets_the_entity_own_joint_positions():
+    arena, arm = Floor(), Arm()
+    arena.attach(arm)
+    physics = _compiled(arena)
+    arm.configure_joints(physics, [0.3, -0.4])
+    np.testing.assert_allclose(physics.named.data.qpos[["arm/shoulder", "arm/elbow"]], [0.3, -0.4])
+
+
+def test_configure_joints_leaves_joints_of_attached_entities_alone():
+    arena, arm, forearm = Floor(), Arm(), Arm()
+    arena.attach(arm)
+    arm.attach(forearm)
+    physics = _compiled(arena)
+    arm.configure_joints(physics, [0.3, -0.4])
+    np.testing.assert_allclose(physics.data.qpos, [0.3, -0.4, 0.0, 0.0])
+    assert [physics.model.joint(i).name for i in range(2)] == ["arm/shoulder", "arm/elbow"]
+
+
+def test_configure_joints_includes_root_joints_of_attached_free_entities():
+    arena, box = Floor(), Box()
+    arena.add_free_entity(box)
+    physics = _compiled(arena)
+    arena.configure_joints(physics, [1, 2, 3, 0, 1, 0, 0])
+    np.testing.assert_allclose(box.get_pose(physics)[0], [1, 2, 3])

@@ -153,6 +153,21 @@ def test_reward_and_discount_specs_come_from_the_task_when_it_defines_them():
     assert env.discount_spec().dtype == np.float32
 
 
+def test_deprecated_step_spec_bundles_task_specs_with_a_warning():
+    env = composer.Environment(CustomSpecs())
+    with pytest.warns(DeprecationWarning, match="reward_spec"):
+        spec = env.step_spec()
+    assert spec.reward.shape == (2,)
+    assert spec.discount.dtype == np.float32
+    assert spec.observation == env.observation_spec()
+
+
+def test_deprecated_step_spec_without_task_specs_is_not_implemented():
+    env = composer.Environment(ReachTask())
+    with pytest.warns(DeprecationWarning), pytest.raises(NotImplementedError, match="reward"):
+        env.step_spec()
+
+
 def test_physics_property_is_a_weak_proxy():
     env = composer.Environment(ReachTask())
     assert isinstance(env.physics, weakref.ProxyType)
@@ -264,3 +279,22 @@ def test_default_observables_step_the_physics_in_one_call_per_control_step(monke
     )
     env.step(np.zeros(2))
     assert calls == [10]
+
+
+class OneSpecPerMotor(ReachTask):
+    """Acts as two agents, each driving one of the arm's motors."""
+
+    def action_spec(self, physics):
+        return [specs.BoundedArray((1,), np.float64, -1.0, 1.0) for _ in range(2)]
+
+    def before_step(self, physics, action, random_state):
+        physics.bind(self.arm.actuators).ctrl = [action[0][0], action[1][0]]
+
+
+def test_task_with_a_list_of_action_specs_gets_a_list_of_checked_actions():
+    env = composer.Environment(OneSpecPerMotor())
+    env.reset()
+    env.step([[0.5], [-0.25]])
+    np.testing.assert_allclose(env.physics.data.ctrl, [0.5, -0.25])
+    with pytest.raises(ValueError, match=r"action\[1\]"):
+        env.step([[0.5], [np.nan]])

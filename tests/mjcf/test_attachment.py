@@ -141,10 +141,32 @@ def test_find_all_default_leaves_out_attached_models_classes(scene):
     assert [d.dclass for d in scene.find_all("default")] == [None]
 
 
-def test_parent_elements_do_not_list_child_elements(scene):
-    frame = scene.attach(_arm())
+def test_frame_and_sections_list_the_attached_models_elements(scene):
+    arm = _arm()
+    frame = scene.attach(arm)
     assert frame in scene.worldbody.all_children()
-    assert frame.all_children() == []
+    assert frame.all_children() == arm.worldbody.all_children()
+    assert frame.all_children()
+    for element in arm.actuator.all_children():
+        assert element in scene.actuator.all_children()
+    assert arm.find("joint", "twist") not in scene.worldbody.all_children()
+
+
+def test_section_text_includes_attached_models_section(scene):
+    arm = _arm()
+    scene.attach(arm)
+    text = scene.actuator.to_xml_string(pretty_print=False)
+    assert text.startswith("<actuator>") and 'name="arm/' in text
+    default_text = scene.default.to_xml_string(pretty_print=False)
+    assert default_text.startswith('<default><default class="/"')
+    assert '<default class="arm/"' in default_text
+
+
+def test_frame_below_a_body_cannot_hold_a_freejoint(scene):
+    frame = scene.worldbody.add("body", name="holder").attach(_arm())
+    with pytest.raises(AttributeError):
+        frame.add("freejoint")
+    frame.add("joint", type="hinge")
 
 
 def test_references_across_models_by_element_and_scoped_name(scene):
@@ -355,3 +377,65 @@ def test_root_full_identifier_is_its_scope_prefix(scene):
     assert scene.full_identifier == ""
     assert arm.full_identifier == "arm/"
     assert hand.full_identifier == "arm/hand/"
+
+
+def test_frames_may_hold_joints_of_the_same_name_scoped_by_frame():
+    scene = mjcf.RootElement(model="scene")
+    left = mjcf.RootElement(model="left")
+    right = mjcf.RootElement(model="right")
+    for model in (left, right):
+        model.worldbody.add("geom", size=[0.1])
+    joint_left = scene.attach(left).add("joint", name="slide", type="slide")
+    joint_right = scene.attach(right).add("joint", name="slide", type="slide")
+    assert joint_left.full_identifier == "left/slide/"
+    assert scene.find("joint", "right/slide/") is joint_right
+    scene.actuator.add("position", name="push", joint=joint_right)
+    physics = mjcf.Physics.from_mjcf_model(scene)
+    assert physics.model.joint("right/slide/").id == physics.bind(joint_right).element_id
+    assert physics.model.actuator("push").trnid[0] == physics.bind(joint_right).element_id
+
+
+def test_attaching_merges_buffer_sizes_taking_the_larger():
+    parent = mjcf.RootElement()
+    parent.size.nconmax = 100
+    parent.size.memory = "10000"
+    child = mjcf.RootElement(model="child")
+    child.size.nconmax = 300
+    child.size.njmax = 50
+    child.size.memory = "1M"
+    parent.attach(child)
+    assert parent.size.nconmax == 300
+    assert parent.size.njmax == 50
+    assert parent.size.memory == "1048576"
+    assert '<size nconmax="300" memory="1048576" njmax="50"/>' in parent.to_xml_string()
+
+
+def test_attaching_merges_time_step_taking_the_smaller():
+    parent = mjcf.RootElement()
+    parent.option.timestep = 0.002
+    child = mjcf.RootElement(model="child")
+    child.option.timestep = 0.001
+    parent.attach(child)
+    assert parent.option.timestep == 0.001
+    assert mjcf.Physics.from_mjcf_model(parent).model.opt.timestep == 0.001
+
+
+def test_memory_with_unknown_unit_is_rejected_when_merging():
+    parent = mjcf.RootElement()
+    parent.size.memory = "10X"
+    child = mjcf.RootElement(model="child")
+    child.size.memory = "1M"
+    with pytest.raises(ValueError, match="memory"):
+        parent.attach(child)
+
+
+def test_section_lists_show_attached_models_elements_after_own(scene):
+    arm = _arm()
+    scene.actuator.add("motor", name="own", joint=scene.worldbody.add("body").add("joint"))
+    scene.attach(arm)
+    motors = scene.actuator.motor
+    assert [m.name for m in motors] == ["own", "drive"]
+    assert motors["arm/drive"] is arm.actuator.motor["drive"]
+    with pytest.raises(KeyError):
+        motors["arm/missing"]
+    assert len(scene.worldbody.body) == 1 + 1  # its own body and the attachment frame

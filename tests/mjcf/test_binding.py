@@ -214,7 +214,7 @@ def test_item_write_on_a_scattered_list_keeps_rows_updated_elsewhere(scene):
 
 def test_scattered_list_reads_fresh_values_after_a_step(scene):
     physics = scene.physics
-    bound = physics.bind([scene.ball_body, scene.target])
+    bound = physics.bind([scene.ball_body, scene.forearm])
     before = bound.xpos.copy()
     physics.step(20)
     assert bound.xpos[0, 2] < before[0, 2]
@@ -268,8 +268,8 @@ def test_mocap_position_of_a_regular_body_is_an_error(scene):
 
 def test_column_names_index_a_binding(scene):
     physics = scene.physics
-    bound = physics.bind([scene.ball_body, scene.target])
-    np.testing.assert_array_equal(bound["xpos", ["x", "z"]], [[0, 1], [0, 1]])
+    bound = physics.bind([scene.ball_body, scene.forearm])
+    np.testing.assert_allclose(bound["xpos", ["x", "z"]], [[0, 1], [1.3, 1]])
     np.testing.assert_array_equal(bound["xpos"], bound.xpos)
 
 
@@ -302,8 +302,9 @@ def test_binding_a_generator_binds_its_elements(scene):
     assert bound is physics.bind([scene.ball, scene.upper])
 
 
-def test_binding_none_returns_none(scene):
-    assert scene.physics.bind(None) is None
+def test_binding_none_is_value_error(scene):
+    with pytest.raises(ValueError, match="None"):
+        scene.physics.bind(None)
 
 
 def test_empty_binding_reads_empty_arrays(scene):
@@ -379,11 +380,6 @@ def test_element_of_a_detached_model_is_an_error(scene):
         scene.physics.bind(scene.robot_site)
 
 
-def test_worldbody_of_an_attached_model_is_an_error_pointing_to_the_frame(scene):
-    with pytest.raises(ValueError, match="attachment frame"):
-        scene.physics.bind(scene.robot.worldbody)
-
-
 def test_non_element_in_a_list_is_an_error_naming_its_position(scene):
     with pytest.raises(ValueError, match="item 1 is a NoneType"):
         scene.physics.bind([scene.ball, None])
@@ -403,3 +399,48 @@ def test_boolean_mask_assignment_on_a_scattered_list_writes_through(scene):
     rgba[rgba == 0] = 0.125
     ball = scene.object_id(mujoco.mjtObj.mjOBJ_GEOM, "ball")
     np.testing.assert_array_equal(physics.model.geom_rgba[ball], [1, 0.125, 0.125, 1])
+
+
+def test_mocap_and_other_bodies_cannot_be_bound_together(scene):
+    with pytest.raises(ValueError, match="mocap"):
+        scene.physics.bind([scene.ball_body, scene.target])
+
+
+def test_binding_constructed_by_namespace_and_names(scene):
+    from mjcf import physics as physics_module
+
+    bound = physics_module.Binding(scene.physics, "geom", ["ball", "upper"])
+    np.testing.assert_array_equal(bound.rgba[0], [1, 0, 0, 1])
+    with pytest.raises(ValueError, match="invalid_namespace"):
+        physics_module.Binding(scene.physics, "invalid_namespace", "x")
+
+
+def test_writing_derived_field_while_dirty_keeps_written_value(scene):
+    physics = scene.physics
+    physics.bind(scene.motor).ctrl = 0.5
+    assert physics.is_dirty
+    physics.bind([scene.tip_pos]).sensordata = 7.0
+    assert not physics.is_dirty
+    np.testing.assert_array_equal(physics.bind([scene.tip_pos]).sensordata, [7.0, 7.0, 7.0])
+
+
+def test_reload_from_xml_string_drops_earlier_bindings(scene):
+    physics = scene.physics
+    before = physics.bind(scene.ball)
+    physics.reload_from_xml_string(scene.root.to_xml_string(), assets=scene.root.get_assets())
+    after = physics.bind(scene.ball)
+    assert after is not before
+    np.testing.assert_array_equal(after.rgba, [1, 0, 0, 1])
+
+
+def test_attached_models_worldbody_binds_its_attachment_frame():
+    scene = mjcf.RootElement(model="scene")
+    arm = mjcf.RootElement(model="arm")
+    arm.worldbody.add("geom", size=[0.1], mass=2)
+    frame = scene.attach(arm)
+    frame.pos = [0, 0, 3]
+    physics = mjcf.Physics.from_mjcf_model(scene)
+    bound = physics.bind(arm.worldbody)
+    assert bound.element_id == physics.bind(frame).element_id
+    np.testing.assert_allclose(bound.xpos, [0, 0, 3])
+    assert physics.bind(scene.worldbody).element_id == 0

@@ -193,6 +193,24 @@ def test_axes_col_names_list_column_labels(physics):
     assert axes.col.names == ["x", "y", "z"]
 
 
+def test_row_axis_converts_joint_names_to_their_dof_rows(physics):
+    # Degrees of freedom: free joint 0-5, hinge 6, ball joint 7-9.
+    row = physics.named.model.dof_jntid.axes.row
+    np.testing.assert_array_equal(row.convert_key_item(["hinge", "ball_joint"]), [6, 7, 8, 9])
+    assert physics.named.model.dof_jntid[row.convert_key_item("hinge")].tolist() == [1]
+    assert row.convert_key_item(slice(1, 3)) == slice(1, 3)
+
+
+def test_column_axis_converts_labels_to_column_indices(physics):
+    assert physics.named.data.xpos.axes.col.convert_key_item("z") == 2
+    assert physics.named.data.xpos.axes.col.convert_key_item(["y", "x"]) == [1, 0]
+
+
+def test_axis_conversion_of_an_unknown_name_is_a_key_error(physics):
+    with pytest.raises(KeyError, match="nowhere"):
+        physics.named.model.dof_jntid.axes.row.convert_key_item(["nowhere"])
+
+
 def test_unlabelled_axes_have_no_names(physics):
     assert physics.named.data.efc_force.axes.row.names is None
     assert physics.named.data.xfrc_applied.axes.col.names is None
@@ -218,3 +236,15 @@ def test_attached_model_objects_are_named_with_their_scope():
     root.worldbody.attach(robot).pos = [1, 0, 0]
     physics = Physics.from_mjcf_model(root)
     np.testing.assert_array_equal(physics.named.data.site_xpos["robot/grip"], [1, 0, 0.5])
+
+
+def test_open_mesh_grid_of_names_and_column_labels(physics):
+    rows, columns = np.ix_(["lower", "ball"], ["r", "a"])
+    np.testing.assert_array_equal(physics.named.model.geom_rgba[rows, columns], [[0, 1], [1, 1]])
+    physics.named.model.geom_rgba[rows, columns] = [[0.5, 0.25], [0.75, 0.125]]
+    np.testing.assert_array_equal(physics.named.model.geom_rgba["lower"], [0.5, 0, 1, 0.25])
+
+
+def test_grid_of_names_owning_several_rows_is_index_error(physics):
+    with pytest.raises(IndexError, match="several rows"):
+        physics.named.data.qpos[np.array([["free"], ["hinge"]])]

@@ -158,3 +158,48 @@ def test_repeated_sections_are_merged():
     assert root.option.timestep == 0.01
     assert root.option.gravity.tolist() == [0, 0, -1]
     assert [g.name for g in root.worldbody.geom] == ["a", "b"]
+
+
+def test_from_file_accepts_a_file_name(tmp_path):
+    path = tmp_path / "model.xml"
+    path.write_text('<mujoco model="named"><worldbody><geom size="1"/></worldbody></mujoco>')
+    assert mjcf.from_file(str(path)).model == "named"
+
+
+def _zip(tmp_path, files):
+    import zipfile
+
+    path = tmp_path / "model.zip"
+    with zipfile.ZipFile(path, "w") as archive:
+        for name, contents in files.items():
+            archive.writestr(name, contents)
+    return str(path)
+
+
+_ZIPPED_XML = """<mujoco model="zipped"><compiler meshdir="meshes"/>
+<asset><mesh name="tet" file="tet.stl"/><mesh name="up" file="../meshes/tet.stl"/></asset>
+<worldbody><geom type="mesh" mesh="tet"/></worldbody></mujoco>"""
+
+
+def test_from_zip_reads_model_and_assets_relative_to_it(tmp_path):
+    path = _zip(tmp_path, {"model.xml": _ZIPPED_XML, "meshes/tet.stl": tetrahedron_stl()})
+    model = mjcf.from_zip(path)
+    assert model.model == "zipped"
+    assert model.asset.mesh["up"].file.contents == tetrahedron_stl()
+    physics = mjcf.Physics.from_mjcf_model(model)
+    assert physics.model.nmesh == 2
+
+
+def test_from_zip_with_several_models_needs_model_file(tmp_path):
+    simple = "<mujoco/>"
+    path = _zip(tmp_path, {"a.xml": simple, "b.xml": '<mujoco model="b"/>'})
+    assert mjcf.from_zip(path, model_file="b.xml").model == "b"
+    with pytest.raises(ValueError, match="model.xml"):
+        mjcf.from_zip(path)
+
+
+def test_from_zip_of_a_non_archive_is_value_error(tmp_path):
+    path = tmp_path / "plain.xml"
+    path.write_text("<mujoco/>")
+    with pytest.raises(ValueError, match="not a zip"):
+        mjcf.from_zip(str(path))

@@ -106,3 +106,24 @@ def test_asset_objects_can_be_assigned_directly():
     )
     model = mujoco.MjModel.from_xml_string(root.to_xml_string(), root.get_assets())
     assert model.mesh_vertnum[0] == 4
+
+
+def test_commit_defaults_on_element_uses_ancestor_childclass():
+    root = mjcf.RootElement()
+    soft = root.default.add("default", dclass="soft")
+    soft.geom.pos = [0, 0, 1]
+    body = root.worldbody.add("body", childclass="soft")
+    geom = body.add("body").add("geom", size=[1])
+    mjcf.commit_defaults(geom)
+    np.testing.assert_array_equal(geom.pos, [0, 0, 1])
+
+
+def test_commit_defaults_on_actuator_takes_every_actuator_kind_default():
+    root = mjcf.RootElement()
+    root.default.general.forcelimited = "true"
+    root.default.motor.forcerange = [-2, 3]
+    joint = root.worldbody.add("body").add("joint", name="j")
+    motor = root.actuator.add("motor", joint=joint)
+    mjcf.commit_defaults(motor)
+    assert motor.forcelimited == "true"
+    np.testing.assert_array_equal(motor.forcerange, [-2, 3])

@@ -63,7 +63,7 @@ def test_building_other_models_between_writes_keeps_the_text(scene):
     scene.find("site", "right").pos = [1, 0, 0]
     second = scene.to_xml_string()
     assert second == first.replace(
-        '<site name="right" class="/"', '<site name="right" pos="1 0 0" class="/"'
+        '<site name="right" class="/"', '<site name="right" class="/" pos="1 0 0"'
     )
 
 

@@ -38,12 +38,12 @@ def test_pretty_print_indents_and_compact_does_not(model):
 
 def test_self_close_false_writes_end_tags(model):
     xml = model.find("geom", "g").to_xml_string(self_close=False)
-    assert xml == f'<geom name="g" size="{1 / 3!r}"></geom>'
+    assert xml == f'<geom name="g" class="/" size="{1 / 3!r}"></geom>\n'
 
 
 def test_every_class_taking_element_names_its_class(model):
     xml = model.to_xml_string()
-    assert f'<geom name="g" size="{1 / 3!r}" class="/"/>' in xml
+    assert f'<geom name="g" class="/" size="{1 / 3!r}"/>' in xml
     assert '<default class="/"/>' in xml
 
 
@@ -85,8 +85,10 @@ def test_prefix_root_scopes_names_relative_to_a_model():
     child = mjcf.RootElement(model="child")
     geom = child.worldbody.add("geom", name="g", size=[1])
     parent.attach(child)
-    assert geom.to_xml_string() == '<geom name="g" size="1"/>'
-    assert geom.to_xml_string(prefix_root=parent) == '<geom name="child/g" size="1"/>'
+    assert geom.to_xml_string() == '<geom name="g" class="/" size="1"/>\n'
+    assert (
+        geom.to_xml_string(prefix_root=parent) == '<geom name="child/g" class="child/" size="1"/>\n'
+    )
     assert geom.prefixed_identifier(parent) == "child/g"
     assert geom.prefixed_identifier() == "g"
     assert geom.full_identifier == "child/g"
@@ -109,3 +111,28 @@ def test_unnamed_freejoint_without_attributes_is_written_and_compiles():
     compiled = mujoco.MjModel.from_xml_string(root.to_xml_string(), root.get_assets())
     assert compiled.njnt == 1
     assert compiled.jnt_type[0] == mujoco.mjtJoint.mjJNT_FREE
+
+
+def test_element_text_names_its_inherited_class_after_its_name():
+    root = mjcf.RootElement()
+    body = root.worldbody.add("body", childclass="soft")
+    root.default.add("default", dclass="soft")
+    joint = body.add("joint", name="j", type="hinge")
+    free_geom = root.worldbody.add("geom", size=[1])
+    assert str(joint) == '<joint name="j" class="soft" type="hinge"/>'
+    assert str(free_geom) == '<geom class="/" size="1"/>'
+
+
+def test_pretty_element_text_ends_with_newline_and_self_only_elides_children():
+    root = mjcf.RootElement()
+    body = root.worldbody.add("body", name="b")
+    body.add("geom", size=[1])
+    assert body.to_xml_string(self_only=True) == '<body name="b">...</body>\n'
+    assert body.to_xml_string(pretty_print=False).startswith('<body name="b"><geom name="//')
+
+
+def test_attachment_frame_writes_its_name_after_its_pose():
+    parent = mjcf.RootElement()
+    frame = parent.attach(mjcf.RootElement(model="arm"))
+    frame.pos = [1, 2, 3]
+    assert str(frame) == '<body pos="1 2 3" name="arm/"/>'

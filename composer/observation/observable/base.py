@@ -41,13 +41,19 @@ AGGREGATORS = {
 
 
 def _resolve_aggregator(name_or_callable: str | Callable | None) -> Callable | None:
+    """Returns the reduction for a name, callable or None.
+
+    Raises:
+      KeyError: for a name that is not one of `AGGREGATORS`, as dm_control does.
+      TypeError: for anything else that is not callable.
+    """
     if name_or_callable is None or callable(name_or_callable):
         return name_or_callable
     if isinstance(name_or_callable, str):
         try:
             return AGGREGATORS[name_or_callable]
         except KeyError:
-            raise ValueError(
+            raise KeyError(
                 f"aggregator: unknown name {name_or_callable!r}; expected one of "
                 f"{sorted(AGGREGATORS)} or a callable reducing the buffer axis"
             ) from None
@@ -179,8 +185,10 @@ class Observable(metaclass=abc.ABCMeta):
     def aggregator(self, value):
         try:
             self._aggregator = _resolve_aggregator(value)
-        except (ValueError, TypeError) as exc:
-            raise type(exc)(f"{self!r}: {exc}") from None
+        except KeyError as exc:
+            raise KeyError(f"{self!r}: {exc.args[0]}") from None
+        except TypeError as exc:
+            raise TypeError(f"{self!r}: {exc}") from None
 
     @property
     def corruptor(self):
@@ -271,8 +279,45 @@ class Observable(metaclass=abc.ABCMeta):
                 raise AttributeError(f"{self!r}: cannot configure unknown option {name!r}")
             setattr(self, name, value)
 
+    def __getitem__(self, key) -> "Observable":
+        """Returns a new, disabled observable whose value is this one's value indexed by `key`.
+
+        The new observable starts with this one's options; afterwards each has its own. A
+        corruptor is applied to the indexed value. (`MJCFFeature` returns an `MJCFFeature`.)
+        """
+        return _Indexed(self, key)
+
     def __repr__(self) -> str:
         return f"<{type(self).__name__} observable>"
+
+
+class _Indexed(Observable):
+    """`source[key]`: the value of another observable, indexed."""
+
+    def __init__(self, source: Observable, key):
+        self._source = source
+        self._key = key
+        super().__init__(
+            source.update_interval,
+            source.buffer_size,
+            source.delay,
+            source.aggregator,
+            source.corruptor,
+        )
+
+    def _callable(self, physics):
+        read, key = self._source._callable(physics), self._key
+        return lambda: np.asarray(read())[key]
+
+    def _live_source(self, physics):
+        source = self._source._live_source(physics)
+        if source is None:
+            return None
+        flat, indices = source
+        return flat, np.asarray(indices[self._key])
+
+    def __repr__(self) -> str:
+        return f"{self._source!r}[{self._key!r}]"
 
 
 class Generic(Observable):
@@ -340,6 +385,9 @@ class MujocoFeature(Observable):
         return f"<MujocoFeature observable {self._kind}[{self._feature_name!r}]>"
 
 
+_BOTH_SEGMENTATION_AND_DEPTH_ENABLED = "'depth' and 'segmentation' cannot both be True"
+
+
 class _ImageObservable(Observable):
     """Shared image options and spec of the camera observables."""
 
@@ -368,7 +416,7 @@ class _ImageObservable(Observable):
 
     def _check_image_kind(self):
         if self._depth and self._segmentation:
-            raise ValueError(f"{self!r}: 'depth' and 'segmentation' cannot both be True")
+            raise ValueError(f"{self!r}: {_BOTH_SEGMENTATION_AND_DEPTH_ENABLED}")
 
     @property
     def height(self) -> int:
@@ -421,14 +469,22 @@ class _ImageObservable(Observable):
         self._render_flag_overrides = value
 
     @property
-    def array_spec(self) -> specs.Array:
-        """(height, width, 3) uint8 RGB, (height, width, 1) float32 depth in metres, or
-        (height, width, 2) int32 segmentation (object id, object type)."""
+    def array_spec(self) -> specs.BoundedArray:
+        """The spec of one image, with the bounds of its pixel values.
+
+        (height, width, 3) uint8 RGB in [0, 255]; (height, width, 1) float32 depth in
+        metres, in [0, inf); or (height, width, 2) int32 segmentation (object id, object
+        type), from -1 (background) up.
+        """
         if self._depth:
-            return specs.Array((self._height, self._width, 1), np.float32)
-        if self._segmentation:
-            return specs.Array((self._height, self._width, 2), np.int32)
-        return specs.Array((self._height, self._width, 3), np.uint8)
+            shape, dtype, minimum, maximum = (1,), np.float32, 0.0, np.inf
+        elif self._segmentation:
+            shape, dtype, minimum, maximum = (2,), np.int32, -1, np.iinfo(np.int32).max
+        else:
+            shape, dtype, minimum, maximum = (3,), np.uint8, 0, 255
+        return specs.BoundedArray(
+            (self._height, self._width) + shape, dtype, minimum=minimum, maximum=maximum
+        )
 
     def _render_function(self, physics, camera):
         """Returns a zero-argument function rendering `camera` (a name or an id)."""

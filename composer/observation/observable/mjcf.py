@@ -20,11 +20,18 @@ def _check_elements(obj, owner: str) -> None:
         _check_element(obj, owner)
 
 
+#: dm_control's name for the error an MJCFCamera with both image kinds raises.
+_BOTH_SEGMENTATION_AND_DEPTH_ENABLED = base._BOTH_SEGMENTATION_AND_DEPTH_ENABLED
+
+
 class MJCFFeature(base.Observable):
     """An observable reading field `kind` of `physics.bind(mjcf_element)`.
 
     `mjcf_element` is one element or a list of elements (`MJCFFeature('xpos', site)`,
     `MJCFFeature('qpos', joints)`); `index`, when given, selects from the bound array.
+    Indexing the observable (`MJCFFeature('xmat', site)[2:6]`) returns a new, disabled
+    observable with the same options whose value is this one's value indexed by the key;
+    indexing again applies the next key to that result.
     """
 
     def __init__(
@@ -41,26 +48,43 @@ class MJCFFeature(base.Observable):
         _check_elements(mjcf_element, f"MJCFFeature({kind!r})")
         self._kind = kind
         self._mjcf_element = mjcf_element
-        self._index = index
+        self._indices = () if index is None else (index,)
         super().__init__(update_interval, buffer_size, delay, aggregator, corruptor)
+
+    def __getitem__(self, key) -> "MJCFFeature":
+        indexed = MJCFFeature(
+            self._kind,
+            self._mjcf_element,
+            self.update_interval,
+            self.buffer_size,
+            self.delay,
+            self.aggregator,
+            self.corruptor,
+        )
+        indexed._indices = self._indices + (key,)
+        return indexed
+
+    def _select(self, value):
+        for index in self._indices:
+            value = value[index]
+        return value
 
     def _callable(self, physics):
         binding = physics.bind(self._mjcf_element)
-        if self._index is None:
+        if not self._indices:
             return functools.partial(getattr, binding, self._kind)
-        kind, index = self._kind, self._index
-        return lambda: getattr(binding, kind)[index]
+        kind = self._kind
+        return lambda: self._select(getattr(binding, kind))
 
     def _live_source(self, physics):
         # A binding serves consecutive rows as a view of MuJoCo's array and gathers others
         # into a reused buffer on every read; only the former is live.
-        value = getattr(physics.bind(self._mjcf_element), self._kind)
-        if self._index is not None:
-            value = value[self._index]
+        value = self._select(getattr(physics.bind(self._mjcf_element), self._kind))
         return base.view_source(value)
 
     def __repr__(self) -> str:
-        return f"<MJCFFeature observable {self._kind!r} of {self._mjcf_element!r}>"
+        selection = "".join(f"[{index!r}]" for index in self._indices)
+        return f"<MJCFFeature observable {self._kind!r}{selection} of {self._mjcf_element!r}>"
 
 
 class MJCFCamera(base._ImageObservable):

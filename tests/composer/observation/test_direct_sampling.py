@@ -53,6 +53,9 @@ def _observables(scene, corrupted=False):
         sensor=observable.MJCFFeature("sensordata", scene.sensor, **options),
         named_tip=observable.MujocoFeature("site_xpos", "tip", **options),
         tip_history=observable.MJCFFeature("xpos", scene.tip, buffer_size=2, **options),
+        tip_xz_of_slice=observable.MJCFFeature("xpos", scene.tip, **options)[::2],
+        named_tip_y=observable.MujocoFeature("site_xpos", "tip", **options)[1],
+        named_ball_quat_xyz=observable.MujocoFeature("xquat", "ball", **options)[1:],
     )
     for obs in observables.values():
         obs.enabled = True
@@ -117,6 +120,9 @@ def test_mjcf_and_mujoco_features_that_read_views_have_live_sources():
         "sensor",
         "named_tip",
         "tip_history",
+        "tip_xz_of_slice",
+        "named_tip_y",
+        "named_ball_quat_xyz",
     }
 
 

@@ -54,6 +54,20 @@ def test_mjcf_feature_index_selects_from_the_bound_value(scene):
     assert obs(scene.physics) == pytest.approx(0.2 - 0.35 * np.sin(0.5))
 
 
+def test_indexing_an_mjcf_feature_gives_an_observable_of_that_slice(scene):
+    whole = observable.MJCFFeature("xpos", scene.tip, update_interval=3, delay=2)
+    sliced = whole[:2]
+    assert sliced is not whole
+    np.testing.assert_allclose(sliced(scene.physics), [0.35 * np.cos(0.5), 0.0], atol=1e-9)
+    assert (sliced.update_interval, sliced.delay) == (3, 2)
+    assert whole(scene.physics).shape == (3,)
+
+
+def test_indexing_an_indexed_mjcf_feature_indexes_the_slice(scene):
+    obs = observable.MJCFFeature("qpos", [scene.hinge, scene.slide])[::-1][0]
+    assert obs(scene.physics) == pytest.approx(0.25)
+
+
 def test_mjcf_feature_reads_sensor_data(scene):
     np.testing.assert_allclose(
         observable.MJCFFeature("sensordata", scene.sensor)(scene.physics),
@@ -71,6 +85,23 @@ def test_mujoco_feature_reads_by_compiled_name(scene):
         observable.MujocoFeature("site_xpos", "tip")(scene.physics),
         observable.MJCFFeature("xpos", scene.tip)(scene.physics),
     )
+
+
+def test_indexing_any_observable_gives_an_observable_of_that_item(scene):
+    obs = observable.MujocoFeature("qpos", ["hinge", "slide"], delay=1)
+    item = obs[1]
+    assert item(scene.physics) == pytest.approx(0.25)
+    assert (item.delay, item.enabled) == (1, False)
+    generic = observable.Generic(lambda physics: np.arange(6).reshape(2, 3))[:, 1]
+    np.testing.assert_array_equal(generic(scene.physics), [1, 4])
+
+
+def test_indexed_observable_corrupts_the_indexed_value(scene):
+    obs = observable.Generic(
+        lambda physics: np.array([1.0, 2.0, 3.0]),
+        corruptor=lambda value, random_state: value * 10,
+    )[1:]
+    np.testing.assert_array_equal(obs(scene.physics), [20.0, 30.0])
 
 
 def test_mujoco_feature_name_may_be_a_callable(scene):

@@ -55,7 +55,7 @@ def test_callable_buffer_size_is_rejected():
 
 
 def test_unknown_aggregator_name_lists_the_valid_ones():
-    with pytest.raises(ValueError, match="'avg'.*'max'.*'mean'.*'median'.*'min'.*'sum'"):
+    with pytest.raises(KeyError, match="'avg'.*'max'.*'mean'.*'median'.*'min'.*'sum'"):
         _generic(aggregator="avg")
 
 
@@ -80,19 +80,22 @@ def test_generic_requires_a_callable():
         observable.Generic(3.0)
 
 
-def test_camera_spec_is_uint8_rgb_by_default():
+def test_camera_spec_is_uint8_rgb_from_0_to_255_by_default():
     spec = observable.MujocoCamera("front", height=48, width=64).array_spec
     assert (spec.shape, spec.dtype) == ((48, 64, 3), np.uint8)
+    assert (spec.minimum, spec.maximum) == (0, 255)
 
 
-def test_camera_spec_is_float_single_channel_for_depth():
+def test_camera_spec_is_non_negative_float_single_channel_for_depth():
     spec = observable.MujocoCamera("front", height=48, width=64, depth=True).array_spec
     assert (spec.shape, spec.dtype) == ((48, 64, 1), np.float32)
+    assert (spec.minimum, spec.maximum) == (0.0, np.inf)
 
 
-def test_camera_spec_is_two_int_channels_for_segmentation():
+def test_camera_spec_is_two_int_channels_from_minus_one_for_segmentation():
     spec = observable.MujocoCamera("front", height=48, width=64, segmentation=True).array_spec
     assert (spec.shape, spec.dtype) == ((48, 64, 2), np.int32)
+    assert (spec.minimum, spec.maximum) == (-1, 2**31 - 1)
 
 
 def test_camera_spec_follows_size_changes():

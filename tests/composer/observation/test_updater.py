@@ -374,6 +374,25 @@ def test_bounded_spec_survives_bound_preserving_aggregator_only():
     assert not isinstance(spec["sum"], specs.BoundedArray)
 
 
+def test_observable_spec_subclass_is_kept_with_buffered_shape_and_name():
+    class PixelSpec(specs.BoundedArray):
+        pass
+
+    class Pixels(observable.Generic):
+        @property
+        def array_spec(self):
+            return PixelSpec((2,), np.uint8, 0, 255)
+
+    obs_updater = updater.Updater(
+        {"pixels": _enabled(Pixels(lambda p: np.array([1, 2], np.uint8), buffer_size=3))}, 1
+    )
+    obs_updater.reset(_Clock(), np.random.RandomState(0))
+    spec = obs_updater.observation_spec()["pixels"]
+    assert type(spec) is PixelSpec
+    assert (spec.shape, spec.dtype, spec.name) == ((3, 2), np.uint8, "pixels")
+    assert (spec.minimum, spec.maximum) == (0, 255)
+
+
 def test_returned_observations_are_not_changed_by_later_steps():
     observables = {"a": _vector(), "b": _vector(buffer_size=3), "c": _vector(delay=1)}
     clock = _Clock()

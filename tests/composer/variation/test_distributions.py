@@ -178,3 +178,30 @@ def test_keyword_parameters_read_as_attributes():
 def test_unknown_attribute_is_an_attribute_error():
     with pytest.raises(AttributeError, match="'Uniform' object has no attribute 'mean'"):
         _ = distributions.Uniform().mean
+
+
+def test_distributions_with_equal_parameters_compare_equal():
+    assert distributions.Uniform([0, 1], [2, 3]) == distributions.Uniform([0, 1], [2, 3])
+    assert distributions.Normal(np.zeros(2), 1.0) == distributions.Normal(np.zeros(2), 1.0)
+    assert distributions.UniformPointOnSphere() == distributions.UniformPointOnSphere()
+
+
+def test_distributions_differing_in_type_parameters_or_single_sample_differ():
+    assert distributions.Normal(0.0, 1.0) != distributions.LogNormal(0.0, 1.0)
+    assert distributions.Normal(0.0, 1.0) != distributions.Normal(0.0, 2.0)
+    assert distributions.Normal(0.0, 1.0) != distributions.Normal(0.0, 1.0, single_sample=True)
+    assert distributions.UniformPointOnSphere() != distributions.UniformPointOnSphere(
+        single_sample=True
+    )
+
+
+def test_biased_random_walks_are_equal_only_to_themselves():
+    walk = distributions.BiasedRandomWalk()
+    assert walk == walk
+    assert walk != distributions.BiasedRandomWalk()
+
+
+def test_distribution_repr_lists_args_kwargs_and_single_sample():
+    assert repr(distributions.Exponential(scale=3)) == (
+        "Exponential(args=(), kwargs={'scale': 3}, single_sample=False)"
+    )

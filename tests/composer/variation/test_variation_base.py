@@ -94,3 +94,32 @@ def test_custom_variation_subclass_works_with_operators():
 def test_variation_base_class_is_abstract():
     with pytest.raises(TypeError):
         variation.Variation()
+
+
+def test_same_expression_built_twice_compares_equal():
+    three, five = deterministic.Constant(3), deterministic.Constant(5)
+    assert three + five == deterministic.Constant(3) + deterministic.Constant(5)
+    assert -three == -deterministic.Constant(3)
+    assert three[0] == deterministic.Constant(3)[0]
+
+
+def test_expressions_with_different_operands_or_operators_differ():
+    three, five = deterministic.Constant(3), deterministic.Constant(5)
+    assert three + five != three + three
+    assert three + five != three - five
+    assert three[0] != three[1]
+
+
+def test_constants_holding_equal_arrays_compare_equal():
+    assert deterministic.Constant(np.array([1, 2])) == deterministic.Constant(np.array([1, 2]))
+    assert deterministic.Constant(np.array([1, 2])) != deterministic.Constant(np.array([1, 3]))
+    assert deterministic.Constant(np.array([1, 2])) != deterministic.Constant(np.array([1, 2, 3]))
+
+
+def test_str_shows_values_and_repr_shows_the_expression_tree():
+    expression = deterministic.Constant(3) + deterministic.Constant(5)
+    assert str(expression) == "add(3, 5)"
+    assert repr(expression) == "BinaryOperation(add(Constant(3), Constant(5)))"
+    item = deterministic.Constant(7)[2]
+    assert str(item) == "7[2]"
+    assert repr(item) == "GetItemOperation(Constant(7)[2])"

@@ -1,0 +1,11 @@
+"""Gymnasium integration: composer environments as `gymnasium.Env` and vector envs.
+
+Importing this package imports `gymnasium` (the optional extra `[gym]`); `import
+composer` does not.
+"""
+
+from composer.gym.batched import BatchedVectorEnv, SubEnvironmentError
+from composer.gym.env import GymnasiumEnv
+from composer.gym.threaded import ThreadedVectorEnv
+
+__all__ = ["BatchedVectorEnv", "GymnasiumEnv", "SubEnvironmentError", "ThreadedVectorEnv"]

@@ -1,0 +1,340 @@
+"""What every vector env of this package shares: batching, seeding and autoreset.
+
+`BatchedVectorEnv` is a `gymnasium.vector.VectorEnv` that keeps the batched outputs in
+preallocated arrays and implements Gymnasium's autoreset modes; a subclass says only
+where the sub-environments live and how a function reaches them (`_map`). The functions
+that run next to a sub-environment (`reset_sub_env`, `step_sub_env`, `call_sub_env`) are
+plain module functions of the sub-environment and picklable arguments, so a backend that
+runs sub-environments in other threads, processes or machines calls the same ones.
+
+Autoreset (https://farama.org/Vector-Autoreset-Mode), for a sub-environment whose
+episode ended (terminated or truncated) at step t:
+
+- NEXT_STEP: step t returns the episode's last observation; at step t+1 the action is
+  ignored, the sub-environment is reset, and it returns the reset observation with
+  reward 0, terminated and truncated False.
+- SAME_STEP: step t resets it at once and returns the reset observation, with step t's
+  reward, terminated and truncated; the last observation and info are in
+  `info['final_obs']` and `info['final_info']` (masks `info['_final_obs']`, ...).
+- DISABLED: nothing is reset; the caller resets it with
+  `reset(options={'reset_mask': mask})` before stepping it again.
+"""
+
+from collections.abc import Callable, Sequence
+from typing import Any, NamedTuple
+
+import gymnasium
+import numpy as np
+from gymnasium.vector import AutoresetMode, VectorEnv
+from gymnasium.vector.utils import batch_space, create_empty_array, iterate
+
+__all__ = [
+    "BatchedVectorEnv",
+    "SubEnvOutcome",
+    "SubEnvironmentError",
+    "call_sub_env",
+    "reset_sub_env",
+    "step_sub_env",
+]
+
+
+class SubEnvironmentError(RuntimeError):
+    """A sub-environment raised; `index` says which, the original error is `__cause__`."""
+
+    def __init__(self, index: int, error: BaseException):
+        super().__init__(f"sub-environment {index} raised {type(error).__name__}: {error}")
+        self.index = index
+
+
+class SubEnvOutcome(NamedTuple):
+    """What one sub-environment returned from a reset or a step.
+
+    `final_observation` and `final_info` are set only when a SAME_STEP autoreset
+    replaced the observation of an episode's last step.
+    """
+
+    observation: Any
+    reward: float
+    terminated: bool
+    truncated: bool
+    info: dict[str, Any]
+    final_observation: Any = None
+    final_info: dict[str, Any] | None = None
+
+
+def reset_sub_env(env: gymnasium.Env, seed: int | None, options: dict | None) -> SubEnvOutcome:
+    """Resets `env`; reward 0, neither terminated nor truncated."""
+    observation, info = env.reset(seed=seed, options=options)
+    return SubEnvOutcome(observation, 0.0, False, False, info)
+
+
+def step_sub_env(
+    env: gymnasium.Env, action, autoreset_mode: AutoresetMode, episode_over: bool
+) -> SubEnvOutcome:
+    """Steps `env`, or resets it as `autoreset_mode` says (see the module docstring).
+
+    Args:
+      episode_over: whether the previous step ended `env`'s episode.
+    """
+    if episode_over and autoreset_mode is AutoresetMode.NEXT_STEP:
+        return reset_sub_env(env, None, None)
+    observation, reward, terminated, truncated, info = env.step(action)
+    if autoreset_mode is AutoresetMode.SAME_STEP and (terminated or truncated):
+        reset_observation, reset_info = env.reset()
+        return SubEnvOutcome(
+            reset_observation, reward, terminated, truncated, reset_info, observation, info
+        )
+    return SubEnvOutcome(observation, reward, terminated, truncated, info)
+
+
+def call_sub_env(env: gymnasium.Env, name: str, args: tuple, kwargs: dict) -> Any:
+    """Calls `env`'s method `name` (looked up through its wrappers), or returns the attribute."""
+    attribute = env.get_wrapper_attr(name)
+    return attribute(*args, **kwargs) if callable(attribute) else attribute
+
+
+def _set_sub_env_attr(env: gymnasium.Env, name: str, value: Any) -> None:
+    env.set_wrapper_attr(name, value)
+
+
+def _render_sub_env(env: gymnasium.Env):
+    return env.render()
+
+
+def _close_sub_env(env: gymnasium.Env) -> None:
+    env.close()
+
+
+def _copy_batch(batch):
+    if isinstance(batch, dict):
+        return type(batch)((key, _copy_batch(part)) for key, part in batch.items())
+    if isinstance(batch, tuple):
+        return tuple(_copy_batch(part) for part in batch)
+    return batch.copy()
+
+
+def _write_row(batch, index: int, value) -> None:
+    if isinstance(batch, dict):
+        for key, part in batch.items():
+            _write_row(part, index, value[key])
+    elif isinstance(batch, tuple):
+        for part, item in zip(batch, value):
+            _write_row(part, index, item)
+    else:
+        batch[index] = value
+
+
+class BatchedVectorEnv(VectorEnv):
+    """A `VectorEnv` of `num_envs` sub-environments reached through `_map`.
+
+    `reset(seed=s)` seeds sub-environment i with `s + i` (or `s[i]` for a list);
+    `reset(options={'reset_mask': mask})` resets only where `mask` (bool, shape
+    (num_envs,)) is True. `step(actions)` returns the batched `(observations, rewards,
+    terminations, truncations, infos)`; observations are written into arrays allocated
+    once (returned as copies when `copy` is True), infos are batched as Gymnasium does
+    (each key with a boolean mask `'_' + key`).
+
+    Args:
+      single_observation_space, single_action_space: one sub-environment's spaces.
+      num_envs: the number of sub-environments.
+      autoreset_mode: an `AutoresetMode` or its value (see the module docstring).
+      metadata: the sub-environments' metadata; 'autoreset_mode' is added.
+      render_mode: the sub-environments' render mode.
+      copy: return copies of the observation arrays rather than the arrays themselves
+        (which the next `step` or `reset` overwrites).
+    """
+
+    def __init__(
+        self,
+        single_observation_space: gymnasium.Space,
+        single_action_space: gymnasium.Space,
+        num_envs: int,
+        *,
+        autoreset_mode: AutoresetMode | str = AutoresetMode.NEXT_STEP,
+        metadata: dict[str, Any] | None = None,
+        render_mode: str | None = None,
+        copy: bool = True,
+    ):
+        self.autoreset_mode = AutoresetMode(autoreset_mode)
+        self.num_envs = num_envs
+        self.metadata = {**(metadata or {}), "autoreset_mode": self.autoreset_mode}
+        self.render_mode = render_mode
+        self.copy = copy
+        self.single_observation_space = single_observation_space
+        self.single_action_space = single_action_space
+        self.observation_space = batch_space(single_observation_space, num_envs)
+        self.action_space = batch_space(single_action_space, num_envs)
+        self._observations = create_empty_array(single_observation_space, num_envs, fn=np.zeros)
+        self._rewards = np.zeros(num_envs, dtype=np.float64)
+        self._terminations = np.zeros(num_envs, dtype=np.bool_)
+        self._truncations = np.zeros(num_envs, dtype=np.bool_)
+        self._episode_over = np.zeros(num_envs, dtype=np.bool_)
+
+    def _map(
+        self,
+        function: Callable[..., Any],
+        arguments: dict[int, tuple],
+        store: Callable[[int, Any], None] | None = None,
+    ) -> dict[int, Any]:
+        """Returns {i: function(sub_env_i, *arguments[i])} for each i in `arguments`.
+
+        With `store`, also calls `store(i, result)` once per result before returning,
+        from whichever thread is convenient (calls for different i touch different data).
+        Every listed sub-environment runs its call even when another raises.
+
+        Raises:
+          SubEnvironmentError: for the lowest index whose call raised.
+        """
+        raise NotImplementedError
+
+    def reset(
+        self,
+        *,
+        seed: int | Sequence[int | None] | None = None,
+        options: dict[str, Any] | None = None,
+    ) -> tuple[Any, dict[str, Any]]:
+        """Resets every sub-environment, or those in `options['reset_mask']`.
+
+        Returns:
+          The batched observations and infos.
+
+        Raises:
+          ValueError: for a seed list whose length is not `num_envs`, or a reset mask
+            that is not a bool array of shape (num_envs,) with at least one True.
+          SubEnvironmentError: if a sub-environment raised.
+        """
+        seeds = self._seeds(seed)
+        options = dict(options or {})
+        mask = self._reset_mask(options.pop("reset_mask", None))
+        sub_options = options or None
+        indices = np.flatnonzero(mask).tolist()
+        outcomes = self._map(
+            reset_sub_env, {i: (seeds[i], sub_options) for i in indices}, self._store
+        )
+        return self._observations_out(), self._batched_infos(outcomes)
+
+    def step(self, actions) -> tuple[Any, np.ndarray, np.ndarray, np.ndarray, dict[str, Any]]:
+        """Steps every sub-environment with its row of `actions`, autoresetting as set.
+
+        Returns:
+          observations, rewards (float64), terminations and truncations (bool), infos.
+
+        Raises:
+          RuntimeError: in DISABLED mode, if a sub-environment whose episode is over was
+            not reset.
+          SubEnvironmentError: if a sub-environment raised.
+        """
+        mode = self.autoreset_mode
+        episode_over = self._episode_over
+        if mode is AutoresetMode.DISABLED and episode_over.any():
+            raise RuntimeError(
+                f"sub-environments {np.flatnonzero(episode_over).tolist()} ended their "
+                "episodes and autoreset_mode is DISABLED: reset them with "
+                "reset(options={'reset_mask': mask}) before stepping"
+            )
+        outcomes = self._map(
+            step_sub_env,
+            {
+                i: (action, mode, bool(episode_over[i]))
+                for i, action in enumerate(iterate(self.action_space, actions))
+            },
+            self._store,
+        )
+        return (
+            self._observations_out(),
+            self._rewards.copy(),
+            self._terminations.copy(),
+            self._truncations.copy(),
+            self._batched_infos(outcomes),
+        )
+
+    def render(self) -> tuple[Any, ...]:
+        """Returns each sub-environment's `render()`, in order."""
+        return self._in_order(self._map(_render_sub_env, self._all(())))
+
+    def call(self, name: str, *args: Any, **kwargs: Any) -> tuple[Any, ...]:
+        """Calls method `name` of every sub-environment (or reads the attribute)."""
+        return self._in_order(self._map(call_sub_env, self._all((name, args, kwargs))))
+
+    def get_attr(self, name: str) -> tuple[Any, ...]:
+        """Returns attribute `name` of every sub-environment."""
+        return self.call(name)
+
+    def set_attr(self, name: str, values: Any) -> None:
+        """Sets attribute `name` of every sub-environment: `values[i]` for a list or
+        tuple (of length `num_envs`), otherwise the same value everywhere.
+
+        Raises:
+          ValueError: for a list or tuple whose length is not `num_envs`.
+        """
+        if not isinstance(values, list | tuple):
+            values = [values] * self.num_envs
+        if len(values) != self.num_envs:
+            raise ValueError(
+                f"set_attr({name!r}): expected {self.num_envs} values, got {len(values)}"
+            )
+        self._map(_set_sub_env_attr, {i: (name, value) for i, value in enumerate(values)})
+
+    def close_extras(self, **kwargs: Any) -> None:
+        """Closes every sub-environment."""
+        self._map(_close_sub_env, self._all(()))
+
+    def _all(self, arguments: tuple) -> dict[int, tuple]:
+        return dict.fromkeys(range(self.num_envs), arguments)
+
+    def _in_order(self, results: dict[int, Any]) -> tuple[Any, ...]:
+        return tuple(results[i] for i in range(self.num_envs))
+
+    def _seeds(self, seed) -> list[int | None]:
+        if seed is None:
+            return [None] * self.num_envs
+        if isinstance(seed, int | np.integer):
+            return [int(seed) + i for i in range(self.num_envs)]
+        seeds = list(seed)
+        if len(seeds) != self.num_envs:
+            raise ValueError(
+                f"seed: expected None, an int or {self.num_envs} seeds (one per "
+                f"sub-environment), got {len(seeds)}"
+            )
+        return seeds
+
+    def _reset_mask(self, mask) -> np.ndarray:
+        if mask is None:
+            return np.ones(self.num_envs, dtype=np.bool_)
+        if (
+            not isinstance(mask, np.ndarray)
+            or mask.dtype != np.bool_
+            or mask.shape != (self.num_envs,)
+            or not mask.any()
+        ):
+            raise ValueError(
+                f"options['reset_mask']: expected a bool array of shape ({self.num_envs},) "
+                f"with at least one True, got {mask!r}"
+            )
+        return mask
+
+    def _store(self, index: int, outcome: SubEnvOutcome) -> None:
+        """Writes one sub-environment's outcome into row `index` of the batched arrays."""
+        _write_row(self._observations, index, outcome.observation)
+        self._rewards[index] = outcome.reward
+        self._terminations[index] = outcome.terminated
+        self._truncations[index] = outcome.truncated
+        # A SAME_STEP autoreset has already started the next episode.
+        self._episode_over[index] = (
+            outcome.terminated or outcome.truncated
+        ) and outcome.final_info is None
+
+    def _observations_out(self):
+        return _copy_batch(self._observations) if self.copy else self._observations
+
+    def _batched_infos(self, outcomes: dict[int, SubEnvOutcome]) -> dict[str, Any]:
+        infos: dict[str, Any] = {}
+        for i, outcome in outcomes.items():
+            if outcome.final_info is not None:
+                infos = self._add_info(
+                    infos,
+                    {"final_obs": outcome.final_observation, "final_info": outcome.final_info},
+                    i,
+                )
+            infos = self._add_info(infos, outcome.info, i)
+        return infos

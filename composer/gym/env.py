@@ -1,0 +1,187 @@
+"""A `dm_env.Environment` (a `composer.Environment` above all) as a `gymnasium.Env`.
+
+Contract of the adapter (`GymnasiumEnv`):
+
+- `observation_space` and `action_space` come from the wrapped environment's specs
+  (see `composer.gym.spaces`): observations are the wrapped environment's own dict of
+  arrays, unchanged, or with `flatten_observations` one `Box` of every feature.
+- `reset(seed=s)` reseeds the wrapped environment's `random_state` in place, so the same
+  `s` gives the same episode; `reset()` without a seed continues the random sequence.
+- `step` returns `(observation, reward, terminated, truncated, info)`: an episode that
+  ends with discount 0 (the task ended it) is *terminated*, one that ends with a
+  non-zero discount (the time limit) is *truncated*; `info['discount']` is the discount.
+- `render()` draws the `camera` with `mujoco`'s off-screen renderer: (height, width, 3)
+  uint8 for 'rgb_array', (height, width) float32 metres for 'depth_array'.
+"""
+
+from typing import Any, ClassVar
+
+import dm_env
+import gymnasium
+import numpy as np
+
+from composer.gym import spaces as spec_spaces
+
+__all__ = ["GymnasiumEnv"]
+
+_RENDER_MODES = ("rgb_array", "depth_array")
+
+
+class GymnasiumEnv(gymnasium.Env):
+    """Runs a `dm_env.Environment` through Gymnasium's `Env` API.
+
+    Args:
+      env: the environment to wrap; seeding needs its `random_state` (an
+        `np.random.RandomState`, as `composer.Environment` has), rendering its `physics`.
+      render_mode: None, 'rgb_array' or 'depth_array'. 'human' needs the interactive
+        viewer, which does not exist yet: asking for it raises (also through
+        `gymnasium.make`), and `metadata` does not list it, since Gymnasium's env checker
+        tries every listed mode.
+      camera: the camera `render()` draws, by name or index; -1 is the free camera.
+      width, height: the size of rendered images in pixels (at most the model's
+        off-screen buffer, `<visual><global offwidth offheight>`).
+      flatten_observations: concatenate every feature observation, in the observation
+        spec's order and each flattened in C order, into one `Box`. Camera images (uint8
+        with at least 3 axes) stay separate: with any, observations are a dict of the
+        features (key 'features') and the images.
+
+    Raises:
+      ValueError: for an unknown `render_mode`, or a render mode for an environment
+        without `physics`.
+      NotImplementedError: for `render_mode='human'`.
+    """
+
+    metadata: ClassVar[dict[str, Any]] = {"render_modes": list(_RENDER_MODES)}
+
+    def __init__(
+        self,
+        env: dm_env.Environment,
+        *,
+        render_mode: str | None = None,
+        camera: int | str = -1,
+        width: int = 640,
+        height: int = 480,
+        flatten_observations: bool = False,
+    ):
+        if render_mode == "human":
+            raise NotImplementedError(
+                "render_mode='human' needs the interactive viewer, which this version does "
+                "not have; use render_mode='rgb_array' and show the frames yourself"
+            )
+        if render_mode is not None and render_mode not in _RENDER_MODES:
+            raise ValueError(
+                f"render_mode: expected None or one of {_RENDER_MODES}, got {render_mode!r}"
+            )
+        if render_mode is not None and not hasattr(env, "physics"):
+            raise ValueError(
+                f"render_mode={render_mode!r}: the wrapped {type(env).__name__} has no "
+                "`physics` to render"
+            )
+        self._env = env
+        self.render_mode = render_mode
+        self._camera = camera
+        self._width = width
+        self._height = height
+        self.metadata = dict(self.metadata)
+        if hasattr(env, "control_timestep"):
+            self.metadata["render_fps"] = 1.0 / env.control_timestep()
+        observation_spec = env.observation_spec()
+        if flatten_observations:
+            self._layout = spec_spaces.feature_layout(observation_spec)
+            self.observation_space = spec_spaces.flat_space(observation_spec, self._layout)
+        else:
+            self._layout = None
+            self.observation_space = spec_spaces.space_from_spec(observation_spec)
+        self.action_space = spec_spaces.box_from_spec(env.action_spec())
+        self._episode_over = True
+
+    @property
+    def dm_env(self) -> dm_env.Environment:
+        """The wrapped `dm_env.Environment`."""
+        return self._env
+
+    def reset(
+        self, *, seed: int | None = None, options: dict[str, Any] | None = None
+    ) -> tuple[Any, dict[str, Any]]:
+        """Starts a new episode and returns `(observation, info)`.
+
+        Args:
+          seed: reseeds the wrapped environment's random state (an int in [0, 2**32));
+            None continues from where the previous episode left it.
+          options: accepted for the Gymnasium API; no option is read.
+
+        Raises:
+          ValueError: for a seed given to an environment without a `random_state`, or a
+            seed outside [0, 2**32).
+        """
+        super().reset(seed=seed)
+        if seed is not None:
+            random_state = getattr(self._env, "random_state", None)
+            if not isinstance(random_state, np.random.RandomState):
+                raise ValueError(
+                    f"reset(seed={seed!r}): the wrapped {type(self._env).__name__} has no "
+                    "`random_state` (np.random.RandomState) to seed"
+                )
+            random_state.seed(seed)
+        timestep = self._env.reset()
+        self._episode_over = False
+        return self._observation(timestep.observation), {}
+
+    def step(self, action) -> tuple[Any, float, bool, bool, dict[str, Any]]:
+        """Applies `action` for one control step.
+
+        Returns:
+          observation, reward (a float), terminated (the episode ended with discount 0),
+          truncated (it ended with a non-zero discount: the time limit), and an info dict
+          holding 'discount'.
+
+        Raises:
+          RuntimeError: if the episode is over (or never started) and `reset` was not
+            called.
+        """
+        if self._episode_over:
+            raise RuntimeError(
+                "step() called on an episode that is over or not started: call reset() first"
+            )
+        timestep = self._env.step(action)
+        discount = timestep.discount
+        terminated = truncated = False
+        if timestep.last():
+            self._episode_over = True
+            terminated = discount == 0
+            truncated = not terminated
+        return (
+            self._observation(timestep.observation),
+            float(timestep.reward),
+            terminated,
+            truncated,
+            {"discount": discount},
+        )
+
+    def render(self) -> np.ndarray | None:
+        """Returns the camera's view in the render mode chosen at construction (or None)."""
+        if self.render_mode is None:
+            return None
+        return self._env.physics.render(
+            height=self._height,
+            width=self._width,
+            camera_id=self._camera,
+            depth=self.render_mode == "depth_array",
+        )
+
+    def close(self) -> None:
+        """Closes the wrapped environment."""
+        self._env.close()
+
+    def _observation(self, observation):
+        layout = self._layout
+        if layout is None:
+            return observation
+        if not layout.images:
+            return np.concatenate([observation[name].ravel() for name in layout.names])
+        flat = {}
+        if layout.names:
+            flat["features"] = np.concatenate([observation[name].ravel() for name in layout.names])
+        for name in layout.images:
+            flat[name] = observation[name]
+        return flat

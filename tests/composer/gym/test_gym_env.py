@@ -1,0 +1,187 @@
+"""GymnasiumEnv runs a dm_env environment through Gymnasium's Env API."""
+
+import warnings
+
+import dm_env
+import gymnasium
+import numpy as np
+import pytest
+from gym_scene import slider_environment
+from gymnasium.utils.env_checker import check_env
+
+import manipulation
+from composer.gym import GymnasiumEnv
+
+
+def test_action_space_has_the_action_specs_bounds():
+    env = GymnasiumEnv(slider_environment())
+    assert env.action_space == gymnasium.spaces.Box(-1.0, 1.0, shape=(1,), dtype=np.float64)
+
+
+def test_observation_space_is_a_dict_of_the_observables():
+    env = GymnasiumEnv(slider_environment())
+    assert list(env.observation_space.keys()) == ["position", "velocity"]
+    assert env.observation_space["position"].shape == (1, 1)
+    observation, info = env.reset(seed=0)
+    assert observation in env.observation_space
+    assert info == {}
+
+
+def test_manipulation_observation_space_flattens_to_one_box_in_spec_order():
+    dm = manipulation.load("lift_brick_features", seed=0)
+    env = GymnasiumEnv(dm, flatten_observations=True)
+    # 6x2 + 6 + 6 joint values, 3 + 3 hand, 3 + 9 pinch site, 3 + 3 + 4 + 3 brick.
+    assert env.observation_space.shape == (55,)
+    flat, _ = env.reset(seed=3)
+    nested, _ = GymnasiumEnv(
+        manipulation.load("lift_brick_features"), flatten_observations=False
+    ).reset(seed=3)
+    np.testing.assert_array_equal(flat[:12], nested["jaco_arm/joints_pos"].ravel())
+    np.testing.assert_array_equal(flat[-3:], nested["duplo2x4/position"].ravel())
+
+
+def test_vision_task_flattens_features_and_keeps_the_camera_image():
+    env = GymnasiumEnv(manipulation.load("lift_brick_vision", seed=0), flatten_observations=True)
+    assert list(env.observation_space.keys()) == ["features", "front_close"]
+    assert env.observation_space["front_close"].shape == (1, 84, 84, 3)
+    assert env.observation_space["front_close"].dtype == np.uint8
+
+
+def test_reset_with_the_same_seed_gives_identical_observations():
+    env = GymnasiumEnv(manipulation.load("lift_brick_features"))
+    first, _ = env.reset(seed=7)
+    env.step(env.action_space.high)
+    env.reset(seed=8)
+    again, _ = env.reset(seed=7)
+    other, _ = env.reset(seed=8)
+    for name in first:
+        np.testing.assert_array_equal(first[name], again[name])
+    assert not np.array_equal(first["duplo2x4/position"], other["duplo2x4/position"])
+
+
+def test_reset_without_a_seed_continues_the_random_sequence():
+    env = GymnasiumEnv(manipulation.load("lift_brick_features"))
+    first, _ = env.reset(seed=7)
+    second, _ = env.reset()
+    assert not np.array_equal(first["duplo2x4/position"], second["duplo2x4/position"])
+
+
+def test_time_limit_end_is_truncated_not_terminated():
+    env = GymnasiumEnv(slider_environment(time_limit=0.06))
+    env.reset(seed=0)
+    results = [env.step(np.zeros(1)) for _ in range(3)]
+    assert [(r[2], r[3]) for r in results] == [(False, False), (False, False), (False, True)]
+    assert results[-1][4]["discount"] == 1.0
+
+
+def test_task_termination_with_discount_zero_is_terminated():
+    env = GymnasiumEnv(slider_environment(end_after_steps=2))
+    env.reset(seed=0)
+    results = [env.step(np.zeros(1)) for _ in range(2)]
+    assert [(r[2], r[3]) for r in results] == [(False, False), (True, False)]
+    assert results[-1][1] == 1.0
+    assert results[-1][4]["discount"] == 0.0
+
+
+def test_step_after_the_episode_ended_asks_for_reset():
+    env = GymnasiumEnv(slider_environment(end_after_steps=1))
+    with pytest.raises(RuntimeError, match="call reset"):
+        env.step(np.zeros(1))
+    env.reset(seed=0)
+    env.step(np.zeros(1))
+    with pytest.raises(RuntimeError, match="call reset"):
+        env.step(np.zeros(1))
+
+
+def test_rgb_render_has_the_requested_size():
+    env = GymnasiumEnv(slider_environment(), render_mode="rgb_array", width=64, height=48)
+    env.reset(seed=0)
+    frame = env.render()
+    assert frame.shape == (48, 64, 3)
+    assert frame.dtype == np.uint8
+
+
+def test_depth_render_is_float_metres_from_the_named_camera():
+    env = GymnasiumEnv(
+        slider_environment(), render_mode="depth_array", camera="side", width=32, height=24
+    )
+    env.reset(seed=0)
+    physics = env.dm_env.physics
+    physics.data.qpos[:] = 0.0
+    physics.forward()
+    depth = env.render()
+    assert depth.shape == (24, 32)
+    assert depth.dtype == np.float32
+    # The camera is 1 m from the block's centre, whose near face is 5 cm closer.
+    assert depth[12, 16] == pytest.approx(0.95, abs=0.01)
+
+
+def test_named_camera_sees_a_different_view_than_the_free_camera():
+    free = GymnasiumEnv(slider_environment(), render_mode="rgb_array", width=32, height=24)
+    side = GymnasiumEnv(
+        slider_environment(), render_mode="rgb_array", camera="side", width=32, height=24
+    )
+    free.reset(seed=0)
+    side.reset(seed=0)
+    assert not np.array_equal(free.render(), side.render())
+
+
+def test_without_render_mode_render_returns_none():
+    env = GymnasiumEnv(slider_environment())
+    env.reset(seed=0)
+    assert env.render() is None
+
+
+def test_human_render_mode_is_not_available_yet():
+    assert GymnasiumEnv.metadata["render_modes"] == ["rgb_array", "depth_array"]
+    with pytest.raises(NotImplementedError, match="viewer"):
+        GymnasiumEnv(slider_environment(), render_mode="human")
+
+
+def test_unknown_render_mode_is_rejected_naming_it():
+    with pytest.raises(ValueError, match="render_mode: expected .* got 'rgb'"):
+        GymnasiumEnv(slider_environment(), render_mode="rgb")
+
+
+def test_render_fps_is_the_control_rate():
+    assert GymnasiumEnv(slider_environment()).metadata["render_fps"] == pytest.approx(50.0)
+
+
+class _Unseedable(dm_env.Environment):
+    def reset(self):
+        return dm_env.restart({"x": np.zeros(1)})
+
+    def step(self, action):
+        return dm_env.transition(0.0, {"x": np.zeros(1)})
+
+    def observation_spec(self):
+        return {"x": dm_env.specs.Array((1,), np.float64)}
+
+    def action_spec(self):
+        return dm_env.specs.BoundedArray((1,), np.float64, -1, 1)
+
+
+def test_plain_dm_env_without_random_state_runs_but_cannot_be_seeded():
+    env = GymnasiumEnv(_Unseedable())
+    observation, _ = env.reset()
+    assert observation["x"].shape == (1,)
+    with pytest.raises(ValueError, match="has no `random_state`"):
+        env.reset(seed=1)
+
+
+@pytest.mark.parametrize("name", manipulation.ALL)
+def test_every_manipulation_task_passes_gymnasiums_env_checker(name):
+    env = GymnasiumEnv(manipulation.load(name, seed=0))
+    with warnings.catch_warnings():
+        # Advice about unbounded observations and non-normalised actions, not errors.
+        warnings.simplefilter("ignore", UserWarning)
+        check_env(env, skip_render_check=True)
+
+
+def test_rendering_env_passes_gymnasiums_env_checker_with_its_render_check():
+    env = gymnasium.make(
+        "composer/reach_site_features-v0", render_mode="rgb_array", width=32, height=24
+    )
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", UserWarning)
+        check_env(env.unwrapped)

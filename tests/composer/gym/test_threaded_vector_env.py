@@ -1,0 +1,241 @@
+"""ThreadedVectorEnv: batching, Gymnasium's autoreset modes, seeding, errors and closing."""
+
+import threading
+
+import gymnasium
+import numpy as np
+import pytest
+from gym_scene import CounterEnv
+from gymnasium.vector import AutoresetMode, SyncVectorEnv
+
+import manipulation
+from composer.gym import GymnasiumEnv, SubEnvironmentError, ThreadedVectorEnv
+
+
+def _counters(lengths, **kwargs):
+    return [lambda length=length: CounterEnv(length, **kwargs) for length in lengths]
+
+
+def _obs(observations):
+    return observations[:, 0].tolist()
+
+
+def _worker_threads(ignore=()):
+    """The live worker threads, less those in `ignore` (left by other tests)."""
+    return [
+        t
+        for t in threading.enumerate()
+        if t.name.startswith("ThreadedVectorEnv") and t not in ignore
+    ]
+
+
+def test_is_a_gymnasium_vector_env_with_batched_spaces():
+    envs = ThreadedVectorEnv(_counters([3, 3, 3]), num_threads=2)
+    assert isinstance(envs, gymnasium.vector.VectorEnv)
+    assert envs.num_envs == 3
+    assert envs.observation_space.shape == (3, 1)
+    assert envs.action_space.shape == (3, 1)
+    assert envs.metadata["autoreset_mode"] is AutoresetMode.NEXT_STEP
+    envs.close()
+
+
+def test_default_thread_count_is_one_per_core_at_most_one_per_env(monkeypatch):
+    monkeypatch.setattr("os.cpu_count", lambda: 3)
+    envs = ThreadedVectorEnv(_counters([2] * 5))
+    assert envs.num_threads == 3
+    envs.close()
+    envs = ThreadedVectorEnv(_counters([2] * 2))
+    assert envs.num_threads == 2
+    envs.close()
+
+
+def test_next_step_autoreset_resets_on_the_step_after_the_end():
+    envs = ThreadedVectorEnv(_counters([1, 2]), num_threads=2)
+    observations, _ = envs.reset(seed=[0, 1])
+    assert _obs(observations) == [0, 100]
+    observations, rewards, terminated, truncated, _ = envs.step(np.zeros((2, 1)))
+    assert _obs(observations) == [1, 101]
+    assert terminated.tolist() == [True, False]
+    # Sub-env 0 is reset (its action ignored): reset observation, reward 0, not done.
+    observations, rewards, terminated, truncated, infos = envs.step(np.zeros((2, 1)))
+    assert _obs(observations) == [10, 102]
+    assert rewards.tolist() == [0.0, 2.0]
+    assert terminated.tolist() == [False, True]
+    assert infos["_reset"].tolist() == [True, False]
+    envs.close()
+
+
+def test_same_step_autoreset_returns_the_reset_observation_and_the_final_one_in_info():
+    envs = ThreadedVectorEnv(_counters([1, 2]), 2, autoreset_mode=AutoresetMode.SAME_STEP)
+    envs.reset(seed=[0, 1])
+    observations, rewards, terminated, truncated, infos = envs.step(np.zeros((2, 1)))
+    assert _obs(observations) == [10, 101]
+    assert rewards.tolist() == [1.0, 1.0]
+    assert terminated.tolist() == [True, False]
+    assert infos["_final_obs"].tolist() == [True, False]
+    assert infos["final_obs"][0].tolist() == [1.0]
+    assert infos["final_info"]["step"][0] == 1
+    observations, *_ = envs.step(np.zeros((2, 1)))
+    # Both episodes end again (lengths 1 and 2) and are reset in the same step.
+    assert _obs(observations) == [20, 110]
+    envs.close()
+
+
+def test_disabled_autoreset_needs_a_masked_reset_before_stepping_again():
+    envs = ThreadedVectorEnv(_counters([1, 3], truncate=True), 2, autoreset_mode="Disabled")
+    envs.reset(seed=[0, 1])
+    _, _, terminated, truncated, _ = envs.step(np.zeros((2, 1)))
+    assert truncated.tolist() == [True, False]
+    with pytest.raises(RuntimeError, match=r"sub-environments \[0\] ended"):
+        envs.step(np.zeros((2, 1)))
+    observations, infos = envs.reset(options={"reset_mask": np.array([True, False])})
+    assert _obs(observations) == [10, 101]
+    assert infos["_reset"].tolist() == [True, False]
+    observations, *_ = envs.step(np.zeros((2, 1)))
+    assert _obs(observations) == [11, 102]
+    envs.close()
+
+
+@pytest.mark.parametrize("mode", list(AutoresetMode))
+def test_every_autoreset_mode_matches_gymnasiums_sync_vector_env(mode):
+    lengths = [1, 2, 3, 2]
+    ours = ThreadedVectorEnv(_counters(lengths), 2, autoreset_mode=mode)
+    reference = SyncVectorEnv(_counters(lengths), autoreset_mode=mode)
+    for envs in (ours, reference):
+        envs.reset(seed=5)
+    for _ in range(7):
+        if mode is AutoresetMode.DISABLED:
+            done = reference._terminations | reference._truncations
+            if done.any():
+                expected = reference.reset(options={"reset_mask": done.copy()})
+                got = ours.reset(options={"reset_mask": done.copy()})
+                np.testing.assert_array_equal(got[0], expected[0])
+        got = ours.step(np.zeros((4, 1)))
+        expected = reference.step(np.zeros((4, 1)))
+        for mine, theirs in zip(got[:4], expected[:4]):
+            np.testing.assert_array_equal(mine, theirs)
+        assert got[4].keys() == expected[4].keys()
+    ours.close()
+
+
+def test_each_sub_env_is_seeded_with_seed_plus_its_index():
+    envs = ThreadedVectorEnv(
+        [lambda: GymnasiumEnv(manipulation.load("reach_site_features"))] * 3, num_threads=2
+    )
+    observations, _ = envs.reset(seed=11)
+    for i in range(3):
+        single, _ = GymnasiumEnv(manipulation.load("reach_site_features")).reset(seed=11 + i)
+        for name, value in single.items():
+            np.testing.assert_array_equal(observations[name][i], value)
+    envs.close()
+
+
+def test_seed_list_of_the_wrong_length_is_rejected():
+    envs = ThreadedVectorEnv(_counters([2, 2]), 2)
+    with pytest.raises(ValueError, match="expected None, an int or 2 seeds"):
+        envs.reset(seed=[1, 2, 3])
+    envs.close()
+
+
+def test_observations_are_copies_unless_copy_is_false():
+    envs = ThreadedVectorEnv(_counters([5, 5]), 2)
+    first, _ = envs.reset(seed=0)
+    envs.step(np.zeros((2, 1)))
+    assert _obs(first) == [0, 100]
+    envs.close()
+    envs = ThreadedVectorEnv(_counters([5, 5]), 2, copy=False)
+    first, _ = envs.reset(seed=0)
+    second, *_ = envs.step(np.zeros((2, 1)))
+    assert second is first
+    envs.close()
+
+
+def test_an_exception_in_a_sub_env_names_its_index_and_does_not_hang():
+    earlier = _worker_threads()
+    fns = _counters([5, 5, 5])
+    fns[2] = lambda: CounterEnv(5, fail_at_step=2)
+    envs = ThreadedVectorEnv(fns, num_threads=2)
+    envs.reset(seed=0)
+    envs.step(np.zeros((3, 1)))
+    with pytest.raises(SubEnvironmentError, match="sub-environment 2 raised ValueError") as info:
+        envs.step(np.zeros((3, 1)))
+    assert info.value.index == 2
+    assert isinstance(info.value.__cause__, ValueError)
+    envs.close()
+    assert _worker_threads(earlier) == []
+
+
+def test_an_exception_while_building_a_sub_env_names_its_index_and_stops_the_threads():
+    earlier = _worker_threads()
+
+    def broken():
+        raise OSError("no such model")
+
+    with pytest.raises(SubEnvironmentError, match="sub-environment 1 raised OSError"):
+        ThreadedVectorEnv([_counters([2])[0], broken], num_threads=2)
+    assert _worker_threads(earlier) == []
+
+
+def test_close_closes_the_sub_envs_and_joins_the_threads():
+    earlier = _worker_threads()
+    before = threading.active_count()
+    envs = ThreadedVectorEnv(
+        [lambda: GymnasiumEnv(manipulation.load("reach_site_features"))] * 2, num_threads=2
+    )
+    assert len(_worker_threads(earlier)) == 2
+    sub_envs = envs.envs
+    envs.close()
+    assert envs.closed
+    assert _worker_threads(earlier) == []
+    assert threading.active_count() == before
+    assert all(env.dm_env.physics is None for env in sub_envs)
+    with pytest.raises(RuntimeError, match="closed"):
+        envs.step(np.zeros((2, 9)))
+
+
+def test_sub_envs_with_different_spaces_are_rejected():
+    earlier = _worker_threads()
+    fns = [lambda: CounterEnv(2), lambda: GymnasiumEnv(manipulation.load("reach_site_features"))]
+    with pytest.raises(ValueError, match="sub-environment 1: observation space"):
+        ThreadedVectorEnv(fns, num_threads=1)
+    assert _worker_threads(earlier) == []
+
+
+def test_call_get_attr_set_attr_and_render_reach_every_sub_env():
+    envs = ThreadedVectorEnv(
+        [
+            lambda: GymnasiumEnv(
+                manipulation.load("reach_site_features"),
+                render_mode="rgb_array",
+                width=32,
+                height=24,
+            )
+        ]
+        * 2,
+        num_threads=2,
+    )
+    envs.reset(seed=0)
+    assert [frame.shape for frame in envs.render()] == [(24, 32, 3)] * 2
+    assert envs.get_attr("render_mode") == ("rgb_array", "rgb_array")
+    envs.set_attr("marker", [1, 2])
+    assert envs.get_attr("marker") == (1, 2)
+    assert envs.call("render")[0].shape == (24, 32, 3)
+    envs.close()
+
+
+def test_invalid_thread_count_is_rejected_naming_the_argument():
+    with pytest.raises(ValueError, match="num_threads: expected an integer >= 1 or None, got 0"):
+        ThreadedVectorEnv(_counters([2]), num_threads=0)
+
+
+def test_vision_sub_envs_render_their_cameras_on_worker_threads():
+    envs = ThreadedVectorEnv(
+        [lambda: GymnasiumEnv(manipulation.load("reach_site_vision"))] * 2, num_threads=2
+    )
+    observations, _ = envs.reset(seed=0)
+    observations, *_ = envs.step(np.zeros((2, 9)))
+    images = observations["front_close"]
+    assert images.shape == (2, 1, 84, 84, 3)
+    assert images.dtype == np.uint8
+    assert images.std() > 0  # a picture of the scene, not a blank buffer
+    envs.close()
