@@ -200,11 +200,13 @@ def _add_element(parent: Element, node, escape_separators: bool) -> None:
         raise ValueError(
             f"{parent._describe()} cannot have a child <{tag}>{_close_matches(tag, allowed)}"
         )
-    if tag == constants.DEFAULT and parent is parent._root and node.get("class", "main") != "main":
-        raise ValueError(
-            f"the top-level <default> is class 'main' and cannot be renamed, got "
-            f"class={node.get('class')!r}"
-        )
+    if tag == constants.DEFAULT and parent is parent._root and "class" in node.attrib:
+        if node.get("class") not in ("", "main"):
+            raise ValueError(
+                f"the top-level <default> is class 'main' and cannot be renamed, got "
+                f"class={node.get('class')!r}"
+            )
+        del node.attrib["class"]  # '' and 'main' both name the top-level class
     if spec.repeated:
         element = Element._create(spec, None, parent._root)
         _set_attributes(element, node, escape_separators)
