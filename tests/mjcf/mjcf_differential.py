@@ -150,15 +150,18 @@ def _names_a_thing(message: str) -> bool:
 
 _DANGLING = re.compile(r"attribute '(\w+)' refers to '([^']*)', but model .* has no '(\w+)'")
 _MUJOCO_ELEMENT = re.compile(r"Element '(\w+)'")
+_PROBLEM_READING = re.compile(r"problem reading attribute '(\w+)'")
 
 
 def documented_difference(text: str, theirs: Outcome, ours: Outcome) -> str | None:
     """Which documented difference (docs/mujoco_differences.md) explains a disagreement."""
+    if _has_empty_reference(etree.fromstring(text.encode())):
+        return "an empty reference is unset; MuJoCo may find an unnamed element by it"
     if theirs.model is not None and ours.error is not None:
         tree = etree.fromstring(text.encode())
         message = str(ours.error)
         match = _DANGLING.search(message)
-        if match and match.group(2) != "world":
+        if match and (match.group(2), match.group(3)) != ("world", "body"):
             value, namespace = match.group(2), match.group(3)
             names = {
                 e.get("name")
@@ -169,20 +172,54 @@ def documented_difference(text: str, theirs: Outcome, ours: Outcome) -> str | No
                 return "a reference to a missing element is an error, even one MuJoCo ignores"
         if isinstance(ours.error, FileNotFoundError) and "attribute" in message:
             return "a missing file is an error, even one MuJoCo does not read"
-        if "has no attribute" in message and any(True for _ in tree.iter("frame")):
-            return "an unknown attribute is an error, also inside <frame>"
-    if ours.model is not None and "required attribute missing" in str(theirs.error):
+        unknown = "has no attribute" in message or "cannot have a child" in message
+        if unknown and any(True for _ in tree.iter("frame")):
+            return "an unknown attribute or child is an error, also inside <frame>"
+        match = _MUJOCO_ELEMENT.search(message)
+        if "required attribute missing: 'name'" in message and match:
+            if any(e.get("name") == "" for e in tree.iter(match.group(1))):
+                return "name='' is unset, also where MuJoCo keeps an empty name"
+    if ours.model is not None:
         match = _MUJOCO_ELEMENT.search(str(theirs.error))
         tree = etree.fromstring(text.encode())
-        if match and any(len(e) == 0 and not e.attrib for e in tree.iter(match.group(1))):
+        blank = _PROBLEM_READING.search(str(theirs.error))
+        if (
+            match
+            and blank
+            and any(not e.get(blank.group(1), "x").strip() for e in tree.iter(match.group(1)))
+        ):
+            return "a blank number is unset, also where MuJoCo cannot read it"
+        if match and any(_empty_single(e) for e in tree.iter(match.group(1))):
             return "an empty element is not written"
     return None
+
+
+def _has_empty_reference(tree) -> bool:
+    for node in _elements(tree):
+        spec = _spec_of(node)
+        for name, value in node.attrib.items():
+            attribute = spec.attributes.get(name) if spec is not None else None
+            if not value and attribute is not None:
+                if attribute.type.kind == attribute_types.REFERENCE:
+                    return True
+    return False
+
+
+def _empty_single(node) -> bool:
+    spec = _spec_of(node)
+    blank = all(not value.strip() for value in node.attrib.values())
+    return len(node) == 0 and blank and spec is not None and not spec.repeated
 
 
 def compare(theirs: Outcome, ours: Outcome, text: str | None = None) -> Result:
     """Classifies our outcome against MuJoCo's on the same document (`text`, if given, lets
     documented differences be recognised)."""
-    if text is not None and (theirs.model is None) != (ours.model is None):
+    both_compiled = theirs.model is not None and ours.model is not None
+    if both_compiled:
+        disagree = bool(model_differences(theirs.model, ours.model))
+    else:
+        disagree = (theirs.model is None) != (ours.model is None)
+    if text is not None and disagree:
         reason = documented_difference(text, theirs, ours)
         if reason is not None:
             return Result(Verdict.DOCUMENTED, reason)

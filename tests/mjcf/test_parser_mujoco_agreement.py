@@ -109,3 +109,11 @@ def test_nameless_asset_that_mujoco_needs_named_is_rejected(asset):
 def test_nameless_skybox_texture_is_accepted():
     asset = "<texture type='skybox' builtin='gradient' width='8' height='8'/>"
     assert _compile(f"<asset>{asset}</asset>").ntex == 1
+
+
+@pytest.mark.parametrize("dclass", ["main", ""])
+def test_top_level_default_may_name_its_class_main_or_nothing(dclass):
+    model = _compile(
+        f"<default class='{dclass}'><geom size='0.5'/></default><worldbody><geom/></worldbody>"
+    )
+    assert model.geom_size[0][0] == 0.5
