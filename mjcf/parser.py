@@ -23,6 +23,10 @@ _XML_INT = re.compile(r"[+-]?[0-9]+\Z")
 _XML_HEX_FLOAT = re.compile(r"[+-]?0[xX]")
 _XML_NON_FINITE = re.compile(r"[+-]?(inf|infinity|nan)\Z", re.IGNORECASE)
 _INT32 = 2**31
+# How deep MuJoCo's XML reader (tinyxml2) lets elements nest, `<mujoco>` being level 1: a
+# childless element may sit one level deeper than any element with children. (An empty
+# element written with a closing tag counts as having children there; lxml cannot tell.)
+_MAX_DEPTH = 499
 # References whose empty value MuJoCo reads as a (missing) default class, not as unset.
 _CLASS_REFERENCES = ("class", "childclass")
 
@@ -46,9 +50,8 @@ def from_xml_string(
     """
     if isinstance(xml_string, str):
         xml_string = xml_string.encode("utf-8")
-    parser = etree.XMLParser(remove_comments=True, remove_blank_text=True)
     try:
-        document = etree.fromstring(xml_string, parser)
+        document = _parse_xml(xml_string)
     except etree.XMLSyntaxError as error:
         raise ValueError(f"invalid MJCF XML: {error}") from None
     return _build(document, escape_separators, model_dir, resolve_references, assets)
@@ -143,11 +146,31 @@ def _read_include(file_name: str, model_dir: str, assets: dict | None):
             ) from None
     if isinstance(text, str):
         text = text.encode("utf-8")
-    parser = etree.XMLParser(remove_comments=True, remove_blank_text=True)
     try:
-        return etree.fromstring(text, parser)
+        return _parse_xml(text)
     except etree.XMLSyntaxError as error:
         raise ValueError(f"<include file={file_name!r}>: invalid XML: {error}") from None
+
+
+def _parse_xml(text: bytes):
+    """The document's root; raises XMLSyntaxError, also when it nests deeper than MuJoCo reads.
+
+    lxml's own limit (256 levels) is below MuJoCo's, so it is lifted (`huge_tree`) and
+    MuJoCo's applied instead; libxml2 still stops at 2048 levels, before Python recursion
+    could.
+    """
+    parser = etree.XMLParser(remove_comments=True, remove_blank_text=True, huge_tree=True)
+    document = etree.fromstring(text, parser)
+    deepest = max(
+        (node for node in document.iter() if len(node) == 0),
+        key=lambda node: sum(1 for _ in node.iterancestors()),
+    )
+    depth = sum(1 for _ in deepest.iterancestors()) + 1
+    if depth > _MAX_DEPTH:
+        raise etree.XMLSyntaxError(
+            f"elements nest {depth} levels deep; MuJoCo reads at most {_MAX_DEPTH}", None, 0, 0
+        )
+    return document
 
 
 def _expand_includes(node, model_dir: str, assets, seen: tuple) -> None:
