@@ -18,6 +18,8 @@ defaults of one model never leak into another.
 
 from __future__ import annotations
 
+import sys
+
 from mjcf import attribute_types, constants, schema, scoped_lookup, skin_file
 from mjcf.asset import Asset
 from mjcf.attachment import AttachmentFrame
@@ -40,6 +42,9 @@ _WORLD = "world"
 _NAMED_BY_USER = ("asset", "custom")
 _BODY = constants.BODY
 _TOP_ONLY_SECTIONS = ("statistic",)
+# Writing takes a few Python frames per level of nesting, and MuJoCo reads models up to 499
+# levels deep: more than Python's default limit of 1000 frames allows.
+_FRAMES_NEEDED = 4000
 # Top-level sections whose element text is only the model's own: the world (attached models
 # hang below attachment frames), defaults (scoped per model) and the global settings.
 _NOT_SHARED = (constants.WORLDBODY, constants.DEFAULT, *_TOP_ONLY_SECTIONS)
@@ -643,7 +648,30 @@ def _models_below(root: RootElement) -> list[RootElement]:
 def element_to_string(
     element: Element, prefix_root, self_close, pretty_print, precision, zero_threshold
 ) -> str:
-    """XML text of `element`; a RootElement gives a complete model with attachments merged."""
+    """XML text of `element`; a RootElement gives a complete model with attachments merged.
+
+    Raises:
+      ValueError: when the elements nest too deeply to write (far beyond what MuJoCo reads).
+    """
+    limit = sys.getrecursionlimit()
+    if limit < _FRAMES_NEEDED:
+        sys.setrecursionlimit(_FRAMES_NEEDED)
+    try:
+        return _element_to_string(
+            element, prefix_root, self_close, pretty_print, precision, zero_threshold
+        )
+    except RecursionError:
+        raise ValueError(
+            f"{element._describe()}: elements nest too deeply to write "
+            "(MuJoCo reads at most 499 levels)"
+        ) from None
+    finally:
+        sys.setrecursionlimit(limit)
+
+
+def _element_to_string(
+    element: Element, prefix_root, self_close, pretty_print, precision, zero_threshold
+) -> str:
     if prefix_root is None:
         prefix_root = element._root
     if isinstance(element, RootElement):
