@@ -117,3 +117,32 @@ def test_top_level_default_may_name_its_class_main_or_nothing(dclass):
         f"<default class='{dclass}'><geom size='0.5'/></default><worldbody><geom/></worldbody>"
     )
     assert model.geom_size[0][0] == 0.5
+
+
+def test_nesting_up_to_mujocos_limit_compiles():
+    depth = 496  # with <mujoco>, <worldbody> and a leaf geom: 499 levels
+    text = "<worldbody>" + "<body><geom size='0.1'/>" * depth + "</body>" * depth + "</worldbody>"
+    assert _compile(text).nbody == depth + 1
+
+
+def test_nesting_beyond_mujocos_limit_is_a_value_error():
+    depth = 497
+    text = "<worldbody>" + "<body><geom size='0.1'/>" * depth + "</body>" * depth + "</worldbody>"
+    assert "MuJoCo reads at most 499" in _rejected(text)
+
+
+def test_a_model_built_too_deep_in_python_is_a_value_error_when_written():
+    root = mjcf.RootElement()
+    body = root.worldbody
+    for _ in range(3000):
+        body = body.add("body")
+    with pytest.raises(ValueError, match="nest too deeply"):
+        root.to_xml_string()
+
+
+def test_contact_pair_friction_takes_five_floats():
+    model = _compile(
+        "<worldbody><geom name='a' size='1'/><geom name='b' size='1'/></worldbody>"
+        "<contact><pair geom1='a' geom2='b' friction='1 2 3 4 5'/></contact>"
+    )
+    np.testing.assert_array_equal(model.pair_friction[0], [1, 2, 3, 4, 5])
