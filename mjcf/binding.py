@@ -80,7 +80,11 @@ class _BoundArray(np.ndarray):
         return self.copy()
 
     def __reduce__(self):
-        return self.copy().__reduce__()
+        # An unpickled copy could no longer write to MuJoCo: refuse, as dm_control does.
+        raise NotImplementedError(
+            "a bound MuJoCo array cannot be pickled: it reads and writes the live simulation; "
+            "pickle a copy instead (np.array(bound_array))"
+        )
 
 
 def _bound_array(array: np.ndarray, source, rows, after_write) -> _BoundArray:
@@ -309,7 +313,8 @@ class Binding:
                 return view
 
         else:
-            view = array[index]
+            # A `_BoundArray` too, only so that pickling it is refused like the others.
+            view = _bound_array(array[index], None, None, None)
 
             def read():
                 if sim.dirty:
