@@ -34,6 +34,12 @@ _FRAME_FLAGS_CLEARED_ON_WRITE = {
 }
 
 
+PICKLING_NOT_SUPPORTED = (
+    "a {type} cannot be pickled: it reads and writes the live simulation; "
+    "pickle a copy instead (np.array(bound_array))"
+)
+
+
 class _BoundArray(np.ndarray):
     """Rows of a MuJoCo array read through a binding; item assignment writes them back.
 
@@ -81,10 +87,7 @@ class _BoundArray(np.ndarray):
 
     def __reduce__(self):
         # An unpickled copy could no longer write to MuJoCo: refuse, as dm_control does.
-        raise NotImplementedError(
-            "a bound MuJoCo array cannot be pickled: it reads and writes the live simulation; "
-            "pickle a copy instead (np.array(bound_array))"
-        )
+        raise NotImplementedError(PICKLING_NOT_SUPPORTED.format(type=type(self)))
 
 
 def _bound_array(array: np.ndarray, source, rows, after_write) -> _BoundArray:
