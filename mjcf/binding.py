@@ -34,6 +34,12 @@ _FRAME_FLAGS_CLEARED_ON_WRITE = {
 }
 
 
+PICKLING_NOT_SUPPORTED = (
+    "a {type} cannot be pickled: it reads and writes the live simulation; "
+    "pickle a copy instead (np.array(bound_array))"
+)
+
+
 class _BoundArray(np.ndarray):
     """Rows of a MuJoCo array read through a binding; item assignment writes them back.
 
@@ -80,7 +86,8 @@ class _BoundArray(np.ndarray):
         return self.copy()
 
     def __reduce__(self):
-        return self.copy().__reduce__()
+        # An unpickled copy could no longer write to MuJoCo: refuse, as dm_control does.
+        raise NotImplementedError(PICKLING_NOT_SUPPORTED.format(type=type(self)))
 
 
 def _bound_array(array: np.ndarray, source, rows, after_write) -> _BoundArray:
@@ -309,7 +316,8 @@ class Binding:
                 return view
 
         else:
-            view = array[index]
+            # A `_BoundArray` too, only so that pickling it is refused like the others.
+            view = _bound_array(array[index], None, None, None)
 
             def read():
                 if sim.dirty:

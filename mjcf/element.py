@@ -437,8 +437,10 @@ class Element:
         return self._spec.children
 
     def _singleton_if_present(self, tag: str) -> Element | None:
+        # Through the `tag` property, so that an error inside it surfaces from `tag` itself
+        # rather than from this lookup, as in dm_control.
         for child in self._children:
-            if child._spec.name == tag:
+            if child.tag == tag:
                 return child
         return None
 

@@ -15,6 +15,10 @@ from mjcf.field_layout import ModelLayout
 from mjcf.rendering import Renderers
 from mjcf.struct_wrappers import DataWrapper, ModelWrapper, flags_set
 
+# The message of the error that pickling a bound array raises, under the name dm_control's
+# tests read it from.
+_PICKLING_NOT_SUPPORTED = binding_module.PICKLING_NOT_SUPPORTED
+
 _WARNING_NAMES = tuple(name for name in mujoco.mjtWarning.__members__ if name != "mjNWARNING")
 _RK4 = int(mujoco.mjtIntegrator.mjINT_RK4)
 _ACTUATION_DISABLED = int(mujoco.mjtDisableBit.mjDSBL_ACTUATION)

@@ -54,6 +54,27 @@ HELPER_MODULES = {
 
 EPISODE_STEPS = 100
 
+_FLOAT_TEXT = (
+    "dm_control writes floats as '%.17g' (0.1 -> 0.10000000000000001); this project writes "
+    "the shortest text that reads back to the same double, as MuJoCo's own writer does"
+)
+_OLD_PHYSICS = (
+    "builds dm_control's own dm_control.mujoco.Physics, which fails on mujoco 4 "
+    "(MjModel.flex_vertedge is gone); no code of this project runs"
+)
+
+#: Failures that remain on purpose or cannot be fixed here, keyed "file::test", with why
+#: (docs/dm_control_differences.md has the details).
+KNOWN_FAILURES = {
+    "mjcf/element_test.py::testAttach": _FLOAT_TEXT,
+    "mjcf/element_test.py::testAttachmentFrames": _FLOAT_TEXT,
+    "mjcf/physics_test.py::test_plugins_elasticity": (
+        "uses <composite>, which mujoco 4 no longer reads"
+    ),
+    "composer/observation/observable/base_test.py::testMujocoFeature": _OLD_PHYSICS,
+    "composer/observation/observable/base_test.py::testMujocoCamera": _OLD_PHYSICS,
+}
+
 _CONFTEST = '''
 """Written by tools/dm_control_conformance.py: redirect, helpers, wording not checked."""
 import importlib
@@ -248,20 +269,31 @@ def run_tasks(python: Path) -> dict:
     raise RuntimeError(f"the manipulation runner printed no results:\n{completed.stderr[-3000:]}")
 
 
-def print_test_table(results: list[FileResult], failing: list[str]) -> float:
-    width = max(len(r.path) for r in results)
-    print(f"{'dm_control test file':<{width}}  passed  failed  skipped")
-    for r in results:
-        print(f"{r.path:<{width}}  {r.passed:6d}  {r.failed:6d}  {r.skipped:7d}")
+def _subtotal(label: str, results: list[FileResult], width: int) -> float:
     passed = sum(r.passed for r in results)
     failed = sum(r.failed for r in results)
     skipped = sum(r.skipped for r in results)
     rate = passed / max(1, passed + failed)
-    print(f"{'total':<{width}}  {passed:6d}  {failed:6d}  {skipped:7d}   pass rate {rate:.1%}")
+    print(f"{label:<{width}}  {passed:6d}  {failed:6d}  {skipped:7d}   pass rate {rate:.1%}")
+    return rate
+
+
+def print_test_table(results: list[FileResult], failing: list[str]) -> float:
+    """Prints per-file counts, subtotals per dm_control package and the failures with
+    their known reasons; returns the overall pass rate."""
+    width = max(len(r.path) for r in results) + 2
+    print(f"{'dm_control test file':<{width}}  passed  failed  skipped")
+    for r in results:
+        print(f"{r.path:<{width}}  {r.passed:6d}  {r.failed:6d}  {r.skipped:7d}")
+    for package in TESTED_PACKAGES:
+        in_package = [r for r in results if r.path.startswith(package + "/")]
+        _subtotal(f"total {package}", in_package, width)
+    rate = _subtotal("total", results, width)
     if failing:
         print("\nfailing tests:")
         for test_id in failing:
-            print(f"  {test_id}")
+            reason = KNOWN_FAILURES.get(test_id.split("::", 1)[0] + "::" + test_id.split("::")[-1])
+            print(f"  {test_id}" + (f"\n      known: {reason}" if reason else ""))
     return rate
 
 

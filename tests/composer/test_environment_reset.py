@@ -160,11 +160,6 @@ def test_initialize_episode_mjcf_changes_are_compiled_before_the_episode():
     np.testing.assert_allclose(env.physics.bind(task.box.geom).size, [0.2, 0.2, 0.2])
 
 
-@pytest.mark.xfail(
-    raises=ValueError,
-    strict=False,
-    reason="mjcf attribute arrays are read-only until in-place writes are supported",
-)
 def test_in_place_mjcf_writes_in_initialize_episode_mjcf_are_compiled():
     # dm_control's Duplo randomises its stud radius this way every episode.
     class WidensBoxInPlace(ReachTask):

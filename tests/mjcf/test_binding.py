@@ -444,3 +444,28 @@ def test_attached_models_worldbody_binds_its_attachment_frame():
     assert bound.element_id == physics.bind(frame).element_id
     np.testing.assert_allclose(bound.xpos, [0, 0, 3])
     assert physics.bind(scene.worldbody).element_id == 0
+
+
+def test_pickling_a_bound_array_is_refused_but_a_copy_pickles():
+    import pickle
+
+    model = mjcf.RootElement()
+    for z in (0.3, 0.6):
+        model.worldbody.add("body", pos=[0.1, 0.2, z]).add("geom", size=[0.1])
+    physics = mjcf.Physics.from_mjcf_model(model)
+    xpos = physics.bind(model.find_all("body")).xpos
+    with pytest.raises(NotImplementedError, match="np.array"):
+        pickle.dumps(xpos)
+    np.testing.assert_allclose(
+        pickle.loads(pickle.dumps(np.array(xpos))), [[0.1, 0.2, 0.3], [0.1, 0.2, 0.6]]
+    )
+
+
+def test_error_inside_a_childs_tag_surfaces_from_the_tag_property():
+    import traceback
+
+    model = mjcf.RootElement()
+    object.__setattr__(model.worldbody, "_spec", None)
+    with pytest.raises(AttributeError) as raised:
+        model.worldbody  # noqa: B018
+    assert traceback.extract_tb(raised.tb)[-1].name == "tag"
