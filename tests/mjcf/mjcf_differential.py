@@ -75,17 +75,21 @@ class Document(NamedTuple):
     note: str
 
 
-def mujoco_outcome(path: str) -> Outcome:
+def mujoco_outcome(path: str | None, text: str | None = None) -> Outcome:
+    """MuJoCo's compile of the file at `path`, or of `text` when `path` is None."""
     try:
+        if path is None:
+            return Outcome(mujoco.MjModel.from_xml_string(text), None)
         return Outcome(mujoco.MjModel.from_xml_path(path), None)
     except Exception as error:  # noqa: BLE001 - any MuJoCo error is a rejection
         return Outcome(None, error)
 
 
-def our_outcome(path: str) -> Outcome:
+def our_outcome(path: str | None, text: str | None = None) -> Outcome:
+    """Our parse and compile of the file at `path`, or of `text` when `path` is None."""
     try:
-        physics = mjcf.Physics.from_mjcf_model(mjcf.from_path(path))
-        return Outcome(physics.model.ptr, None)
+        root = mjcf.from_path(path) if path is not None else mjcf.from_xml_string(text)
+        return Outcome(mjcf.Physics.from_mjcf_model(root).model.ptr, None)
     except Exception as error:  # noqa: BLE001 - classified by compare
         return Outcome(None, error)
 
@@ -719,17 +723,24 @@ class Workspace:
         self.path = os.path.join(self.directory, "model.xml")
 
     def run(self, document: Document, mujoco_done=None) -> Result:
-        """Compiles the document both ways and compares; `mujoco_done()` is called between."""
-        with open(self.path, "w", encoding="utf-8") as handle:
-            handle.write(document.text)
-        theirs = mujoco_outcome(self.path)
+        """Compiles the document both ways and compares; `mujoco_done()` is called between.
+
+        A document that names files is compiled from a file in the workspace (from_path,
+        from_xml_path); any other from its text (from_xml_string on both sides).
+        """
+        path = None
+        if "file=" in document.text:
+            path = self.path
+            with open(path, "w", encoding="utf-8") as handle:
+                handle.write(document.text)
+        theirs = mujoco_outcome(path, document.text)
         if theirs.error is not None and not isinstance(theirs.error, ValueError):
             # MuJoCo 4.0 raises RuntimeError('Caught an unknown exception!') on some inputs
             # and may then deadlock on the next compile in the process.
             return Result(Verdict.MUJOCO_CRASH, f"{type(theirs.error).__name__}: {theirs.error}")
         if mujoco_done is not None:
             mujoco_done()
-        return compare(theirs, our_outcome(self.path), document.text)
+        return compare(theirs, our_outcome(path, document.text), document.text)
 
     def close(self) -> None:
         shutil.rmtree(self.directory, ignore_errors=True)
