@@ -230,6 +230,10 @@ def compare(theirs: Outcome, ours: Outcome, text: str | None = None) -> Result:
     if ours.error is not None and not isinstance(ours.error, DOCUMENTED_ERRORS):
         return Result(Verdict.CRASH, f"{type(ours.error).__name__}: {ours.error}")
     if ours.error is not None and not _names_a_thing(str(ours.error)):
+        if theirs.error is not None and not _names_a_thing(str(theirs.error)):
+            # MuJoCo's own message names nothing either (e.g. "could not allocate mjData
+            # arena"); ours passes it on and cannot be clearer.
+            return Result(Verdict.AGREE, "both reject, neither names the element")
         return Result(Verdict.UNCLEAR, f"{type(ours.error).__name__}: {ours.error}")
     if theirs.model is None and ours.model is None:
         return Result(Verdict.AGREE, "both reject")
