@@ -33,11 +33,15 @@ fi
 rm -rf "$work/tree"
 mkdir -p "$work/tree"
 git ls-files -z | xargs -0 cp --parents -t "$work/tree"
-paths=$(IFS=,; echo "${targets[*]}")
+# Lists in mutmut's setup.cfg section are one item per (indented) line. mutmut runs the tests
+# inside mutants/, which holds only what it is told to copy: all of the tree.
+paths=$(printf '\n    %s' "${targets[@]}")
+copied=$(git ls-files | cut -d/ -f1 | sort -u | sed 's/^/    /')
 cat > "$work/tree/setup.cfg" <<CFG
 [mutmut]
-paths_to_mutate=$paths
-tests_dir=tests/
+source_paths=$paths
+also_copy=
+$copied
 CFG
 
 cd "$work/tree"

@@ -6,7 +6,11 @@ import sys
 
 import pytest
 
+import composer
+
 _SCRIPT = os.path.join(os.path.dirname(__file__), "trajectory_run.py")
+# The subprocesses import the same packages as this process, installed or not.
+_ENV = {**os.environ, "PYTHONPATH": os.path.dirname(os.path.dirname(composer.__file__))}
 
 
 def _digests(runs):
@@ -17,6 +21,7 @@ def _digests(runs):
             stdout=subprocess.PIPE,
             stderr=subprocess.PIPE,
             text=True,
+            env=_ENV,
         )
         for task, seed in runs
     ]

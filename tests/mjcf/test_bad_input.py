@@ -12,7 +12,11 @@ import sys
 import pytest
 from bad_input_cases import DOCUMENTED
 
+import mjcf
+
 _SCRIPT = os.path.join(os.path.dirname(__file__), "bad_input_cases.py")
+# The subprocess imports the same mjcf as this process, installed or not.
+_ENV = {**os.environ, "PYTHONPATH": os.path.dirname(os.path.dirname(mjcf.__file__))}
 _SECONDS_PER_CASE = 5.0
 #: Cases that are valid MJCF (at MuJoCo's depth limit, many elements, a UTF-16 file).
 _VALID = {"nested 496 bodies", "100k sibling sites", "UTF-16 document"}
@@ -35,6 +39,7 @@ def reports(tmp_path_factory):
         text=True,
         timeout=120,
         check=False,
+        env=_ENV,
     )
     assert done.returncode == 0, done.stderr[-2000:]
     lines = [json.loads(line) for line in done.stdout.splitlines() if line.startswith("{")]
