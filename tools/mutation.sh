@@ -37,11 +37,16 @@ git ls-files -z | xargs -0 cp --parents -t "$work/tree"
 # inside mutants/, which holds only what it is told to copy: all of the tree.
 paths=$(printf '\n    %s' "${targets[@]}")
 copied=$(git ls-files | cut -d/ -f1 | sort -u | sed 's/^/    /')
+# Tests that run this project in a Python subprocess of their own cannot see mutmut's copy.
+ignored=$(grep -l "sys.executable" tests -r --include "test_*.py" \
+  | grep -v -e test_determinism.py -e test_bad_input.py | sed 's/^/    --ignore=/')
 cat > "$work/tree/setup.cfg" <<CFG
 [mutmut]
 source_paths=$paths
 also_copy=
 $copied
+pytest_add_cli_args=
+$ignored
 CFG
 
 cd "$work/tree"
