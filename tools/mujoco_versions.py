@@ -1,0 +1,224 @@
+"""Tests every supported MuJoCo minor release; prints release -> passed/failed/skipped.
+
+Usage: ``python tools/mujoco_versions.py [--releases 3.3 4.0] [--strict] [-- PYTEST_ARGS]``
+
+Builds one venv per release under ``.cache/mujoco_versions/<version>`` (kept between runs),
+installs this project with its ``[test]`` extra and that ``mujoco`` there, and runs
+``pytest`` in each with ``MUJOCO_GL=egl``. The releases are the newest patch of every minor
+release that pip offers from the project's floor (``mjcf.mujoco_compat.MINIMUM_VERSION``)
+up; ``--releases`` picks some of them by minor (``3.3``, the newest patch) or exact version
+(``3.3.0``). With ``--strict`` the exit status is 1 when a release has a failing test or
+its install or test run breaks.
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import re
+import subprocess
+import sys
+import time
+from pathlib import Path
+from typing import NamedTuple
+
+REPO = Path(__file__).resolve().parent.parent
+CACHE = REPO / ".cache" / "mujoco_versions"
+_COMPAT_MODULE = REPO / "mjcf" / "mujoco_compat.py"
+_SUMMARY_COUNT = re.compile(r"(\d+) (passed|failed|skipped|errors?|xfailed|xpassed)")
+
+
+class Release(NamedTuple):
+    """One MuJoCo release to test."""
+
+    version: str
+    minor: str
+
+
+class Outcome(NamedTuple):
+    """What one release's test run gave."""
+
+    version: str
+    passed: int
+    failed: int
+    skipped: int
+    seconds: float
+    problem: str  # empty when the run reached pytest's summary
+
+    @property
+    def ok(self) -> bool:
+        return not self.problem and self.failed == 0
+
+
+def _version_key(version: str) -> tuple[int, ...]:
+    return tuple(int(part) for part in re.findall(r"\d+", version)[:3])
+
+
+def _minor(version: str) -> str:
+    return ".".join(version.split(".")[:2])
+
+
+def minimum_version() -> str:
+    """The project's MuJoCo floor, read from the module that enforces it at import."""
+    match = re.search(r'^MINIMUM_VERSION = "([\d.]+)"', _COMPAT_MODULE.read_text(), re.M)
+    if match is None:
+        raise RuntimeError(f'no MINIMUM_VERSION = "x.y.z" line in {_COMPAT_MODULE}')
+    return match.group(1)
+
+
+def available_versions() -> list[str]:
+    """Every final mujoco release that pip offers, newest first."""
+    result = subprocess.run(
+        [sys.executable, "-m", "pip", "index", "versions", "mujoco"],
+        capture_output=True,
+        text=True,
+        check=True,
+    )
+    for line in result.stdout.splitlines():
+        if line.startswith("Available versions:"):
+            versions = [v.strip() for v in line.split(":", 1)[1].split(",")]
+            return [v for v in versions if re.fullmatch(r"\d+\.\d+\.\d+", v)]
+    raise RuntimeError(f"pip index versions mujoco listed no versions:\n{result.stdout}")
+
+
+def supported_releases(versions: list[str], floor: str) -> list[Release]:
+    """The newest patch of each minor release from `floor`'s minor up, oldest first."""
+    newest: dict[str, str] = {}
+    for version in versions:
+        if _version_key(version) < _version_key(floor):
+            continue
+        minor = _minor(version)
+        if minor not in newest or _version_key(version) > _version_key(newest[minor]):
+            newest[minor] = version
+    return [Release(v, m) for m, v in sorted(newest.items(), key=lambda i: _version_key(i[1]))]
+
+
+def pick(releases: list[Release], versions: list[str], wanted: list[str]) -> list[Release]:
+    """The releases named in `wanted`: a minor (``3.3``) or an exact version (``3.3.0``)."""
+    by_minor = {release.minor: release for release in releases}
+    picked = []
+    for name in wanted:
+        if name in by_minor:
+            picked.append(by_minor[name])
+        elif name in versions:
+            picked.append(Release(name, _minor(name)))
+        else:
+            known = ", ".join(by_minor)
+            raise SystemExit(f"--releases: {name!r} is not a minor ({known}) or a pip version")
+    return picked
+
+
+def _run(args: list[str], log, **kwargs) -> int:
+    log.write(f"$ {' '.join(args)}\n")
+    log.flush()
+    return subprocess.run(args, stdout=log, stderr=subprocess.STDOUT, **kwargs).returncode
+
+
+def _venv_python(version: str) -> Path:
+    return CACHE / version / "bin" / "python"
+
+
+def _install(version: str, log) -> str:
+    """Builds the venv for `version` if needed; returns a problem or an empty string."""
+    python = _venv_python(version)
+    marker = CACHE / version / ".installed"
+    if marker.exists():
+        return ""
+    if _run([sys.executable, "-m", "venv", "--clear", str(CACHE / version)], log):
+        return "venv creation failed"
+    pip = [str(python), "-m", "pip", "install", "-q"]
+    if _run([*pip, "--upgrade", "pip"], log):
+        return "pip upgrade failed"
+    if _run([*pip, "-e", f"{REPO}[test]", f"mujoco=={version}"], log):
+        return "install failed"
+    marker.write_text(version + "\n")
+    return ""
+
+
+def _summary_counts(output: str) -> dict[str, int] | None:
+    """Counts from pytest's closing summary line, or None where there is none."""
+    for line in reversed(output.splitlines()):
+        if " in " in line and _SUMMARY_COUNT.search(line):
+            counts: dict[str, int] = {}
+            for number, word in _SUMMARY_COUNT.findall(line):
+                key = "failed" if word.startswith("error") else word
+                counts[key] = counts.get(key, 0) + int(number)
+            return counts
+    return None
+
+
+def run_release(release: Release, pytest_args: list[str]) -> Outcome:
+    """Installs (once) and tests one release; its full log goes to ``logs/<version>.txt``."""
+    start = time.monotonic()
+    log_path = CACHE / "logs" / f"{release.version}.txt"
+    log_path.parent.mkdir(parents=True, exist_ok=True)
+    with open(log_path, "w") as log:
+        problem = _install(release.version, log)
+        if problem:
+            return Outcome(release.version, 0, 0, 0, time.monotonic() - start, problem)
+        env = dict(os.environ, MUJOCO_GL="egl")
+        env.pop("VIRTUAL_ENV", None)
+        args = [str(_venv_python(release.version)), "-m", "pytest", "-q", "-p", "no:cacheprovider"]
+        log.write(f"$ {' '.join(args + pytest_args)}\n")
+        log.flush()
+        result = subprocess.run(
+            args + pytest_args, cwd=REPO, env=env, capture_output=True, text=True
+        )
+        log.write(result.stdout + result.stderr)
+    counts = _summary_counts(result.stdout)
+    seconds = time.monotonic() - start
+    if counts is None:
+        return Outcome(release.version, 0, 0, 0, seconds, f"no pytest summary, see {log_path}")
+    return Outcome(
+        release.version,
+        counts.get("passed", 0),
+        counts.get("failed", 0),
+        counts.get("skipped", 0),
+        seconds,
+        "",
+    )
+
+
+def print_table(outcomes: list[Outcome]) -> None:
+    print(f"{'mujoco':<10}{'passed':>8}{'failed':>8}{'skipped':>9}{'seconds':>9}  result")
+    for o in outcomes:
+        result = o.problem or ("ok" if o.ok else "FAILED")
+        print(f"{o.version:<10}{o.passed:>8}{o.failed:>8}{o.skipped:>9}{o.seconds:>9.0f}  {result}")
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument(
+        "--releases",
+        nargs="+",
+        metavar="RELEASE",
+        help="minors (3.3: newest patch) or exact versions (3.3.0); default: every minor",
+    )
+    parser.add_argument(
+        "--strict", action="store_true", help="exit 1 when any release has a failure"
+    )
+    parser.add_argument("pytest_args", nargs="*", help="extra arguments for pytest (after --)")
+    args = parser.parse_args(argv)
+    versions = available_versions()
+    releases = supported_releases(versions, minimum_version())
+    if args.releases:
+        releases = pick(releases, versions, args.releases)
+    outcomes = []
+    for release in releases:
+        print(f"mujoco {release.version}: installing and testing ...", flush=True)
+        outcomes.append(run_release(release, args.pytest_args))
+    print_table(outcomes)
+    failed = sum(o.failed for o in outcomes)
+    passed = sum(o.passed for o in outcomes)
+    skipped = sum(o.skipped for o in outcomes)
+    broken = [o.version for o in outcomes if o.problem]
+    print(f"mujoco_versions: {passed} passed, {failed} failed, {skipped} skipped")
+    if broken:
+        print(f"releases whose run broke: {', '.join(broken)}")
+    if args.strict and (failed or broken):
+        return 1
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
