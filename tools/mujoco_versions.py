@@ -2,13 +2,14 @@
 
 Usage: ``python tools/mujoco_versions.py [--releases 3.3 4.0] [--strict] [-- PYTEST_ARGS]``
 
-Builds one venv per release under ``.cache/mujoco_versions/<version>`` (kept between runs),
-installs this project with its ``[test]`` extra and that ``mujoco`` there, and runs
-``pytest`` in each with ``MUJOCO_GL=egl``. The releases are the newest patch of every minor
-release that pip offers from the project's floor (``mjcf.mujoco_compat.MINIMUM_VERSION``)
-up; ``--releases`` picks some of them by minor (``3.3``, the newest patch) or exact version
-(``3.3.0``). With ``--strict`` the exit status is 1 when a release has a failing test or
-its install or test run breaks.
+Builds one venv per release under ``.cache/mujoco_versions/<version>`` (kept between runs;
+``--venvs`` puts them elsewhere), installs this project with its ``[test]`` extra and that
+``mujoco`` there, and runs ``pytest`` in each with ``MUJOCO_GL=egl``; each run's full output
+goes to ``logs/<version>.txt`` beside the venvs. The releases are the newest patch of every
+minor release that pip offers from the project's floor (``mjcf.mujoco_compat.MINIMUM_VERSION``)
+up; ``--releases`` picks some: ``floor`` (the floor version itself), ``newest``, a minor
+(``3.3``, its newest patch) or an exact version (``3.3.0``). With ``--strict`` the exit status
+is 1 when a release has a failing test or its install or test run breaks.
 """
 
 from __future__ import annotations
@@ -25,6 +26,7 @@ from typing import NamedTuple
 REPO = Path(__file__).resolve().parent.parent
 CACHE = REPO / ".cache" / "mujoco_versions"
 _COMPAT_MODULE = REPO / "mjcf" / "mujoco_compat.py"
+_TAIL_LINES = 15
 _SUMMARY_COUNT = re.compile(r"(\d+) (passed|failed|skipped|errors?|xfailed|xpassed)")
 
 
@@ -44,6 +46,7 @@ class Outcome(NamedTuple):
     skipped: int
     seconds: float
     problem: str  # empty when the run reached pytest's summary
+    details: tuple[str, ...]  # pytest's FAILED/ERROR lines, or the log's tail on a problem
 
     @property
     def ok(self) -> bool:
@@ -93,18 +96,25 @@ def supported_releases(versions: list[str], floor: str) -> list[Release]:
     return [Release(v, m) for m, v in sorted(newest.items(), key=lambda i: _version_key(i[1]))]
 
 
-def pick(releases: list[Release], versions: list[str], wanted: list[str]) -> list[Release]:
-    """The releases named in `wanted`: a minor (``3.3``) or an exact version (``3.3.0``)."""
+def pick(
+    releases: list[Release], versions: list[str], wanted: list[str], floor: str
+) -> list[Release]:
+    """The releases named in `wanted`: a minor (``3.3``), an exact version (``3.3.0``),
+    ``floor`` (exactly the project's floor version) or ``newest`` (the newest release)."""
     by_minor = {release.minor: release for release in releases}
+    aliases = {"floor": floor, "newest": releases[-1].version}
     picked = []
     for name in wanted:
+        name = aliases.get(name, name)
         if name in by_minor:
             picked.append(by_minor[name])
         elif name in versions:
             picked.append(Release(name, _minor(name)))
         else:
             known = ", ".join(by_minor)
-            raise SystemExit(f"--releases: {name!r} is not a minor ({known}) or a pip version")
+            raise SystemExit(
+                f"--releases: {name!r} is not floor, newest, a minor ({known}) or a pip version"
+            )
     return picked
 
 
@@ -114,21 +124,14 @@ def _run(args: list[str], log, **kwargs) -> int:
     return subprocess.run(args, stdout=log, stderr=subprocess.STDOUT, **kwargs).returncode
 
 
-def _venv_python(version: str) -> Path:
-    return CACHE / version / "bin" / "python"
-
-
-def _install(version: str, log) -> str:
-    """Builds the venv for `version` if needed; returns a problem or an empty string."""
-    python = _venv_python(version)
-    marker = CACHE / version / ".installed"
+def _install(venv: Path, version: str, log) -> str:
+    """Builds `venv` with mujoco `version` unless it exists; returns a problem or ''."""
+    marker = venv / ".installed"
     if marker.exists():
         return ""
-    if _run([sys.executable, "-m", "venv", "--clear", str(CACHE / version)], log):
+    if _run([sys.executable, "-m", "venv", "--clear", str(venv)], log):
         return "venv creation failed"
-    pip = [str(python), "-m", "pip", "install", "-q"]
-    if _run([*pip, "--upgrade", "pip"], log):
-        return "pip upgrade failed"
+    pip = [str(venv / "bin" / "python"), "-m", "pip", "install", "-q"]
     if _run([*pip, "-e", f"{REPO}[test]", f"mujoco=={version}"], log):
         return "install failed"
     marker.write_text(version + "\n")
@@ -147,18 +150,22 @@ def _summary_counts(output: str) -> dict[str, int] | None:
     return None
 
 
-def run_release(release: Release, pytest_args: list[str]) -> Outcome:
-    """Installs (once) and tests one release; its full log goes to ``logs/<version>.txt``."""
+def run_release(release: Release, venvs: Path, pytest_args: list[str]) -> Outcome:
+    """Installs (once) and tests one release in ``venvs/<version>``; its full log goes to
+    ``venvs/logs/<version>.txt``."""
     start = time.monotonic()
-    log_path = CACHE / "logs" / f"{release.version}.txt"
+    venv = venvs / release.version
+    log_path = venvs / "logs" / f"{release.version}.txt"
     log_path.parent.mkdir(parents=True, exist_ok=True)
     with open(log_path, "w") as log:
-        problem = _install(release.version, log)
-        if problem:
-            return Outcome(release.version, 0, 0, 0, time.monotonic() - start, problem)
+        problem = _install(venv, release.version, log)
+    if problem:
+        tail = tuple(log_path.read_text().splitlines()[-_TAIL_LINES:])
+        return Outcome(release.version, 0, 0, 0, time.monotonic() - start, problem, tail)
+    with open(log_path, "a") as log:
         env = dict(os.environ, MUJOCO_GL="egl")
         env.pop("VIRTUAL_ENV", None)
-        args = [str(_venv_python(release.version)), "-m", "pytest", "-q", "-p", "no:cacheprovider"]
+        args = [str(venv / "bin" / "python"), "-m", "pytest", "-q", "-p", "no:cacheprovider"]
         log.write(f"$ {' '.join(args + pytest_args)}\n")
         log.flush()
         result = subprocess.run(
@@ -168,7 +175,13 @@ def run_release(release: Release, pytest_args: list[str]) -> Outcome:
     counts = _summary_counts(result.stdout)
     seconds = time.monotonic() - start
     if counts is None:
-        return Outcome(release.version, 0, 0, 0, seconds, f"no pytest summary, see {log_path}")
+        tail = tuple((result.stdout + result.stderr).splitlines()[-_TAIL_LINES:])
+        return Outcome(
+            release.version, 0, 0, 0, seconds, f"no pytest summary, see {log_path}", tail
+        )
+    failures = tuple(
+        line for line in result.stdout.splitlines() if line.startswith(("FAILED ", "ERROR "))
+    )
     return Outcome(
         release.version,
         counts.get("passed", 0),
@@ -176,6 +189,7 @@ def run_release(release: Release, pytest_args: list[str]) -> Outcome:
         counts.get("skipped", 0),
         seconds,
         "",
+        failures,
     )
 
 
@@ -192,7 +206,11 @@ def main(argv: list[str] | None = None) -> int:
         "--releases",
         nargs="+",
         metavar="RELEASE",
-        help="minors (3.3: newest patch) or exact versions (3.3.0); default: every minor",
+        help="floor, newest, minors (3.3: its newest patch) or exact versions (3.3.0); "
+        "default: every minor",
+    )
+    parser.add_argument(
+        "--venvs", type=Path, default=CACHE, help=f"where the venvs are kept (default {CACHE})"
     )
     parser.add_argument(
         "--strict", action="store_true", help="exit 1 when any release has a failure"
@@ -200,21 +218,25 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("pytest_args", nargs="*", help="extra arguments for pytest (after --)")
     args = parser.parse_args(argv)
     versions = available_versions()
-    releases = supported_releases(versions, minimum_version())
+    floor = minimum_version()
+    releases = supported_releases(versions, floor)
     if args.releases:
-        releases = pick(releases, versions, args.releases)
+        releases = pick(releases, versions, args.releases, floor)
     outcomes = []
     for release in releases:
         print(f"mujoco {release.version}: installing and testing ...", flush=True)
-        outcomes.append(run_release(release, args.pytest_args))
+        outcome = run_release(release, args.venvs.resolve(), args.pytest_args)
+        for line in outcome.details:
+            print(f"  {line}")
+        outcomes.append(outcome)
     print_table(outcomes)
-    failed = sum(o.failed for o in outcomes)
-    passed = sum(o.passed for o in outcomes)
-    skipped = sum(o.skipped for o in outcomes)
     broken = [o.version for o in outcomes if o.problem]
-    print(f"mujoco_versions: {passed} passed, {failed} failed, {skipped} skipped")
     if broken:
         print(f"releases whose run broke: {', '.join(broken)}")
+    failed = sum(o.failed for o in outcomes) + len(broken)
+    passed = sum(o.passed for o in outcomes)
+    skipped = sum(o.skipped for o in outcomes)
+    print(f"mujoco_versions: {passed} passed, {failed} failed, {skipped} skipped")
     if args.strict and (failed or broken):
         return 1
     return 0
