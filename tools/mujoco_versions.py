@@ -7,9 +7,11 @@ Builds one venv per release under ``.cache/mujoco_versions/<version>`` (kept bet
 ``mujoco`` there, and runs ``pytest`` in each with ``MUJOCO_GL=egl``; each run's full output
 goes to ``logs/<version>.txt`` beside the venvs. The releases are the newest patch of every
 minor release that pip offers from the project's floor (``mjcf.mujoco_compat.MINIMUM_VERSION``)
-up; ``--releases`` picks some: ``floor`` (the floor version itself), ``newest``, a minor
-(``3.3``, its newest patch) or an exact version (``3.3.0``). With ``--strict`` the exit status
-is 1 when a release has a failing test or its install or test run breaks.
+up, the floor version itself, and the newest release below the floor, where importing the
+project must fail with the ImportError that names both versions. ``--releases`` picks some:
+``floor``, ``newest``, ``below-floor``, a minor (``3.3``, its newest patch) or an exact
+version (``3.3.0``). With ``--strict`` the exit status is 1 when a release has a failing test
+or its install or test run breaks.
 """
 
 from __future__ import annotations
@@ -17,6 +19,7 @@ from __future__ import annotations
 import argparse
 import os
 import re
+import shutil
 import subprocess
 import sys
 import time
@@ -31,10 +34,11 @@ _SUMMARY_COUNT = re.compile(r"(\d+) (passed|failed|skipped|errors?|xfailed|xpass
 
 
 class Release(NamedTuple):
-    """One MuJoCo release to test."""
+    """One MuJoCo release to test; one below the floor is tested for a clean ImportError."""
 
     version: str
     minor: str
+    below_floor: bool = False
 
 
 class Outcome(NamedTuple):
@@ -96,24 +100,38 @@ def supported_releases(versions: list[str], floor: str) -> list[Release]:
     return [Release(v, m) for m, v in sorted(newest.items(), key=lambda i: _version_key(i[1]))]
 
 
+def below_floor_release(versions: list[str], floor: str) -> Release | None:
+    """The newest release older than `floor`, or None when pip offers none."""
+    older = [v for v in versions if _version_key(v) < _version_key(floor)]
+    if not older:
+        return None
+    version = max(older, key=_version_key)
+    return Release(version, _minor(version), below_floor=True)
+
+
 def pick(
     releases: list[Release], versions: list[str], wanted: list[str], floor: str
 ) -> list[Release]:
     """The releases named in `wanted`: a minor (``3.3``), an exact version (``3.3.0``),
-    ``floor`` (exactly the project's floor version) or ``newest`` (the newest release)."""
+    ``floor`` (exactly the project's floor version), ``newest`` (the newest release) or
+    ``below-floor`` (the newest release older than the floor)."""
     by_minor = {release.minor: release for release in releases}
     aliases = {"floor": floor, "newest": releases[-1].version}
+    below = below_floor_release(versions, floor)
     picked = []
     for name in wanted:
         name = aliases.get(name, name)
-        if name in by_minor:
+        if name == "below-floor" and below is not None:
+            picked.append(below)
+        elif name in by_minor:
             picked.append(by_minor[name])
         elif name in versions:
             picked.append(Release(name, _minor(name)))
         else:
             known = ", ".join(by_minor)
             raise SystemExit(
-                f"--releases: {name!r} is not floor, newest, a minor ({known}) or a pip version"
+                f"--releases: {name!r} is not floor, newest, below-floor, a minor ({known}) "
+                "or a pip version"
             )
     return picked
 
@@ -124,17 +142,32 @@ def _run(args: list[str], log, **kwargs) -> int:
     return subprocess.run(args, stdout=log, stderr=subprocess.STDOUT, **kwargs).returncode
 
 
-def _install(venv: Path, version: str, log) -> str:
-    """Builds `venv` with mujoco `version` unless it exists; returns a problem or ''."""
+def _install(venv: Path, release: Release, log) -> str:
+    """Builds `venv` for `release` unless it exists; returns a problem or ''."""
     marker = venv / ".installed"
     if marker.exists():
         return ""
     if _run([sys.executable, "-m", "venv", "--clear", str(venv)], log):
         return "venv creation failed"
     pip = [str(venv / "bin" / "python"), "-m", "pip", "install", "-q"]
-    if _run([*pip, "-e", f"{REPO}[test]", f"mujoco=={version}"], log):
+    mujoco = f"mujoco=={release.version}"
+    if release.below_floor:
+        # The project's own requirement excludes this mujoco: install the project with its
+        # dependencies first, then put the old mujoco in its place. Newer mujoco wheels leave
+        # files that pip does not remove (plugins linked to their libmujoco), hence the rmtree.
+        if _run([*pip, "-e", f"{REPO}[test]"], log):
+            return "install failed"
+        if _run(
+            [str(venv / "bin" / "python"), "-m", "pip", "uninstall", "-q", "-y", "mujoco"], log
+        ):
+            return "uninstall failed"
+        for leftover in venv.glob("lib/python*/site-packages/mujoco"):
+            shutil.rmtree(leftover)
+        if _run([*pip, mujoco], log):
+            return "install failed"
+    elif _run([*pip, "-e", f"{REPO}[test]", mujoco], log):
         return "install failed"
-    marker.write_text(version + "\n")
+    marker.write_text(release.version + "\n")
     return ""
 
 
@@ -158,10 +191,12 @@ def run_release(release: Release, venvs: Path, pytest_args: list[str]) -> Outcom
     log_path = venvs / "logs" / f"{release.version}.txt"
     log_path.parent.mkdir(parents=True, exist_ok=True)
     with open(log_path, "w") as log:
-        problem = _install(venv, release.version, log)
+        problem = _install(venv, release, log)
     if problem:
         tail = tuple(log_path.read_text().splitlines()[-_TAIL_LINES:])
         return Outcome(release.version, 0, 0, 0, time.monotonic() - start, problem, tail)
+    if release.below_floor:
+        return _check_import_refused(release, venv, log_path, start)
     with open(log_path, "a") as log:
         env = dict(os.environ, MUJOCO_GL="egl")
         env.pop("VIRTUAL_ENV", None)
@@ -193,10 +228,31 @@ def run_release(release: Release, venvs: Path, pytest_args: list[str]) -> Outcom
     )
 
 
-def print_table(outcomes: list[Outcome]) -> None:
+def _check_import_refused(release: Release, venv: Path, log_path: Path, start: float) -> Outcome:
+    """Imports the project under a mujoco below the floor: passes when the import fails with
+    the ImportError that names both versions, fails on anything else."""
+    result = subprocess.run(
+        [str(venv / "bin" / "python"), "-c", "import mjcf, composer, manipulation"],
+        cwd=venv,
+        capture_output=True,
+        text=True,
+    )
+    with open(log_path, "a") as log:
+        log.write(result.stdout + result.stderr)
+    lines = result.stderr.strip().splitlines()
+    last = lines[-1] if lines else "(the import succeeded)"
+    expected = f"ImportError: this project needs mujoco>={minimum_version()}, but mujoco "
+    refused = last.startswith(expected + f"{release.version} is installed")
+    seconds = time.monotonic() - start
+    return Outcome(release.version, int(refused), int(not refused), 0, seconds, "", (last,))
+
+
+def print_table(outcomes: list[Outcome], below_floor: set[str]) -> None:
     print(f"{'mujoco':<10}{'passed':>8}{'failed':>8}{'skipped':>9}{'seconds':>9}  result")
     for o in outcomes:
         result = o.problem or ("ok" if o.ok else "FAILED")
+        if o.version in below_floor and not o.problem:
+            result += ": below the floor, import " + ("refused" if o.ok else "NOT refused")
         print(f"{o.version:<10}{o.passed:>8}{o.failed:>8}{o.skipped:>9}{o.seconds:>9.0f}  {result}")
 
 
@@ -206,8 +262,8 @@ def main(argv: list[str] | None = None) -> int:
         "--releases",
         nargs="+",
         metavar="RELEASE",
-        help="floor, newest, minors (3.3: its newest patch) or exact versions (3.3.0); "
-        "default: every minor",
+        help="floor, newest, below-floor, minors (3.3: its newest patch) or exact versions "
+        "(3.3.0); default: below-floor, floor and every minor",
     )
     parser.add_argument(
         "--venvs", type=Path, default=CACHE, help=f"where the venvs are kept (default {CACHE})"
@@ -222,6 +278,9 @@ def main(argv: list[str] | None = None) -> int:
     releases = supported_releases(versions, floor)
     if args.releases:
         releases = pick(releases, versions, args.releases, floor)
+    else:
+        extra = ["below-floor"] + ([] if floor in {r.version for r in releases} else ["floor"])
+        releases = pick(releases, versions, extra, floor) + releases
     outcomes = []
     for release in releases:
         print(f"mujoco {release.version}: installing and testing ...", flush=True)
@@ -229,7 +288,7 @@ def main(argv: list[str] | None = None) -> int:
         for line in outcome.details:
             print(f"  {line}")
         outcomes.append(outcome)
-    print_table(outcomes)
+    print_table(outcomes, {r.version for r in releases if r.below_floor})
     broken = [o.version for o in outcomes if o.problem]
     if broken:
         print(f"releases whose run broke: {', '.join(broken)}")

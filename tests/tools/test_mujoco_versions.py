@@ -31,6 +31,12 @@ def test_floor_and_newest_name_the_exact_floor_and_the_newest_release():
     assert [r.version for r in picked] == ["3.3.0", "4.0.0"]
 
 
+def test_below_floor_is_the_newest_release_older_than_the_floor():
+    releases = mujoco_versions.supported_releases(_PIP_VERSIONS, "3.3.0")
+    picked = mujoco_versions.pick(releases, _PIP_VERSIONS, ["below-floor"], "3.3.0")
+    assert picked == [mujoco_versions.Release("3.2.7", "3.2", below_floor=True)]
+
+
 def test_picking_a_release_pip_does_not_offer_names_the_choices():
     releases = mujoco_versions.supported_releases(_PIP_VERSIONS, "3.3.0")
     with pytest.raises(SystemExit, match=r"'3\.9'.*3\.3, 3\.4, 3\.17, 4\.0"):
