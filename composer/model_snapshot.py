@@ -139,12 +139,14 @@ def _layout(model: mujoco.MjModel) -> tuple:
     return _size_getter()(model)
 
 
-def _copy_struct(target, source) -> None:
-    """Copies every field of MuJoCo struct `source` into `target` in place, nested ones too.
+# The MjModel structs a snapshot saves besides the buffer. Bindings before mujoco 3.16 give
+# them no setter: they are then copied field by field (about 100 µs instead of 0.2 µs).
+_STRUCTS = ("opt", "vis", "stat")
+_STRUCTS_ASSIGNABLE = all(getattr(mujoco.MjModel, name).fset is not None for name in _STRUCTS)
 
-    Field by field because older bindings (before mujoco 3.16) give `MjModel.opt`, `vis`
-    and `stat` no setter.
-    """
+
+def _copy_struct(target, source) -> None:
+    """Copies every field of MuJoCo struct `source` into `target` in place, nested ones too."""
     for name in dir(source):
         if name.startswith("_"):
             continue
@@ -200,9 +202,14 @@ class ModelSnapshot:
         """Writes the saved parameters back into the model."""
         np.copyto(self._buffer, self._saved_buffer)
         model = self._model
-        _copy_struct(model.opt, self._opt)
-        _copy_struct(model.vis, self._vis)
-        _copy_struct(model.stat, self._stat)
+        if _STRUCTS_ASSIGNABLE:
+            model.opt = self._opt
+            model.vis = self._vis
+            model.stat = self._stat
+        else:
+            _copy_struct(model.opt, self._opt)
+            _copy_struct(model.vis, self._vis)
+            _copy_struct(model.stat, self._stat)
 
     def load(self, other: mujoco.MjModel) -> bool:
         """Takes `other`'s parameters as this snapshot's, and restores them into the model.
