@@ -4,6 +4,9 @@ Before the files are collected, docs/generated/ (ignored by git) is filled with 
 gallery (tools/docs_gallery.py), the lifecycle and observables diagrams
 (tools/docs_figures.py) and the performance charts (tools/docs_charts.py). The marker
 `<!-- benchmark-results -->` in a page is replaced by the benchmark tables.
+
+Under `mkdocs serve` the files are generated for the first build only: writing them into
+the watched docs folder would otherwise start a new build after every build.
 """
 
 import json
@@ -38,7 +41,14 @@ def _run_tool(script: str, out: pathlib.Path) -> None:
     print(f"INFO    -  {script}: {time.perf_counter() - start:.1f} s", flush=True)
 
 
+_generated_in_this_process = False
+
+
 def on_pre_build(config, **kwargs) -> None:
+    global _generated_in_this_process
+    if _generated_in_this_process:
+        return
+    _generated_in_this_process = True
     out = _generated_dir(config)
     out.mkdir(parents=True, exist_ok=True)
     _run_tool("docs_gallery.py", out)
