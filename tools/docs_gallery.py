@@ -22,6 +22,8 @@ from render_arenas import write_png  # noqa: E402
 
 IMAGE_HEIGHT, IMAGE_WIDTH = 300, 400
 _CAMERA = "front_close"
+# Shown smaller than rendered, so that the observation table fits beside the picture.
+_SHOWN_WIDTH = 256
 _SEED = 0
 
 
@@ -137,9 +139,9 @@ def gallery_markdown(entries: list[TaskEntry], seconds: float) -> str:
             '<div class="gallery-task" markdown>',
             "",
             f"![{entry.name} after reset]({entry.image_file}){{ loading=lazy "
-            f"width={IMAGE_WIDTH} height={IMAGE_HEIGHT} }}",
+            f"width={_SHOWN_WIDTH} height={_SHOWN_WIDTH * IMAGE_HEIGHT // IMAGE_WIDTH} }}",
             "",
-            "<div markdown>",
+            '<div class="gallery-specs" markdown>',
             "",
             *_observation_table(entry.observations),
             "",
@@ -147,7 +149,11 @@ def gallery_markdown(entries: list[TaskEntry], seconds: float) -> str:
             "",
             "</div>",
             "",
+            '<div class="gallery-specs" markdown>',
+            "",
             *_action_table(entry.actions),
+            "",
+            "</div>",
             "",
         ]
     return "\n".join(lines)

@@ -10,6 +10,7 @@ would from a web server.
 import argparse
 import contextlib
 import pathlib
+import re
 import socket
 import subprocess
 import sys
@@ -27,6 +28,8 @@ _CHROMIUM_FLAGS = (
     "--disable-component-update",
     "--disable-sync",
     "--hide-scrollbars",
+    # Let the page finish loading (fonts, lazily loaded images, a jump to an #anchor).
+    "--virtual-time-budget=5000",
 )
 
 
@@ -85,7 +88,7 @@ def main() -> None:
     args.out.mkdir(parents=True, exist_ok=True)
     with _serve(args.site) as base:
         for page in args.pages:
-            name = page.strip("/").replace("/", "_").removesuffix(".svg") or "home"
+            name = re.sub(r"[^A-Za-z0-9]+", "_", page.removesuffix(".svg")).strip("_") or "home"
             output = args.out / f"{name}.png"
             screenshot(base + page, output, height=args.height)
             print(output)
