@@ -42,6 +42,9 @@ _WORLD = "world"
 _NAMED_BY_USER = ("asset", "custom")
 _BODY = constants.BODY
 _TOP_ONLY_SECTIONS = ("statistic",)
+# An actuator shortcut (<position/>, <intvelocity/>, ...) in a default class sets the class's
+# actuator settings even when it is empty, so it is written even then.
+_ACTUATOR_TAGS = frozenset(schema.root_spec().children[constants.ACTUATOR].children)
 # Writing takes a few Python frames per level of nesting, and MuJoCo reads models up to 499
 # levels deep: more than Python's default limit of 1000 frames allows.
 _FRAMES_NEEDED = 4000
@@ -474,7 +477,7 @@ class _Writer:
             if child._spec.name == constants.DEFAULT:
                 child_name = prefix + child._attributes.get("class", "")
                 self.default_class(child, depth + 1, prefix, child_name)
-            elif child._children or child._attributes:
+            elif child._children or child._attributes or child._spec.name in _ACTUATOR_TAGS:
                 self.visit(child, depth + 1, prefix, None)
         out.append(f"{self.indent(depth)}</default>{self.newline()}")
 
