@@ -146,3 +146,13 @@ def test_contact_pair_friction_takes_five_floats():
         "<contact><pair geom1='a' geom2='b' friction='1 2 3 4 5'/></contact>"
     )
     np.testing.assert_array_equal(model.pair_friction[0], [1, 2, 3, 4, 5])
+
+
+@pytest.mark.parametrize(("shortcut", "bias_type"), [("position", 1), ("intvelocity", 1)])
+def test_empty_actuator_shortcut_in_a_default_class_sets_its_actuators(shortcut, bias_type):
+    model = _compile(
+        f"<default><{shortcut}/></default>"
+        "<worldbody><body><joint name='j'/><geom size='0.1'/></body></worldbody>"
+        "<actuator><general joint='j' ctrlrange='-1 1'/></actuator>"
+    )
+    assert model.actuator_biastype[0] == bias_type  # mjBIAS_AFFINE, as MuJoCo reads it
