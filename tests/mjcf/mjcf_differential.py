@@ -154,7 +154,6 @@ def _names_a_thing(message: str) -> bool:
 
 _DANGLING = re.compile(r"attribute '(\w+)' refers to '([^']*)', but model .* has no '(\w+)'")
 _MUJOCO_ELEMENT = re.compile(r"Element '(\w+)'")
-_PROBLEM_READING = re.compile(r"problem reading attribute '(\w+)'")
 
 
 def documented_difference(text: str, theirs: Outcome, ours: Outcome) -> str | None:
@@ -186,13 +185,12 @@ def documented_difference(text: str, theirs: Outcome, ours: Outcome) -> str | No
     if ours.model is not None:
         match = _MUJOCO_ELEMENT.search(str(theirs.error))
         tree = etree.fromstring(text.encode())
-        blank = _PROBLEM_READING.search(str(theirs.error))
-        if (
-            match
-            and blank
-            and any(not e.get(blank.group(1), "x").strip() for e in tree.iter(match.group(1)))
+        if match and any(
+            any(not value.strip() for value in e.attrib.values()) for e in tree.iter(match.group(1))
         ):
-            return "a blank number is unset, also where MuJoCo cannot read it"
+            # MuJoCo counts some blank attributes as given: a blank <freejoint group>
+            # cannot be read, a blank quat next to euler is a second orientation.
+            return "a blank number is unset, also where MuJoCo counts it as given"
         if match and any(_empty_single(e) for e in tree.iter(match.group(1))):
             return "an empty element is not written"
     return None
