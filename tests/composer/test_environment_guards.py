@@ -144,3 +144,33 @@ def test_observable_changing_shape_raises_and_reset_recovers():
     task.shape = (1,)
     assert env.reset().observation["clock"].shape == shape
     assert env.step(np.zeros(2)).mid()
+
+
+class SubstepRecorder(ClockTask):
+    """Records what each sub-step hook receives."""
+
+    def __init__(self):
+        super().__init__()
+        self.before = []
+        self.after = []
+
+    def before_substep(self, physics, action, random_state):
+        self.before.append((np.array(action), random_state, physics.data.time))
+
+    def after_substep(self, physics, random_state):
+        self.after.append((random_state, physics.data.time))
+
+
+def test_substep_hooks_get_the_action_and_the_environments_random_state_every_substep():
+    task = SubstepRecorder()
+    env = composer.Environment(task, random_state=5)
+    env.reset()
+    env.step(np.array([0.5, -0.25]))
+    assert len(task.before) == len(task.after) == 10
+    for action, random_state, _ in task.before:
+        np.testing.assert_array_equal(action, [0.5, -0.25])
+        assert random_state is env.random_state
+    assert all(random_state is env.random_state for random_state, _ in task.after)
+    # before_substep sees the time before each physics step, after_substep the time after.
+    np.testing.assert_allclose([t for *_, t in task.before], np.arange(10) * 0.002)
+    np.testing.assert_allclose([t for _, t in task.after], np.arange(1, 11) * 0.002)
