@@ -6,6 +6,10 @@ into a Ray actor with `ray.remote`. The host keeps its sub-environments on a
 Ray's per-call cost is paid once per actor, not per sub-environment. A sub-environment
 that raises does not stop the others: its error comes back, in place of its result, as
 a `SubEnvFailure`, which the caller raises as a `SubEnvironmentError`.
+
+A call's arguments and results cross the process boundary as one pickled `bytes` each
+(`pack`, `unpack`): Ray hands a `bytes` over as it is, where it would serialise each of
+the many small observation arrays on its own, which costs more than the pickling.
 """
 
 import pickle
@@ -18,7 +22,22 @@ import gymnasium
 from composer.gym.batched import SubEnvironmentError
 from composer.gym.threaded import ThreadedVectorEnv
 
-__all__ = ["HostSpec", "SubEnvFailure", "SubEnvHost"]
+__all__ = ["HostSpec", "SubEnvFailure", "SubEnvHost", "pack", "unpack"]
+
+
+def pack(value: Any) -> bytes:
+    """`value` pickled; through cloudpickle where pickle cannot (a lambda, say)."""
+    try:
+        return pickle.dumps(value, protocol=pickle.HIGHEST_PROTOCOL)
+    except (pickle.PicklingError, AttributeError, TypeError):
+        from ray import cloudpickle  # only ever called where Ray runs
+
+        return cloudpickle.dumps(value, protocol=pickle.HIGHEST_PROTOCOL)
+
+
+def unpack(data: bytes) -> Any:
+    """The value that `pack` pickled."""
+    return pickle.loads(data)
 
 
 class SubEnvFailure(NamedTuple):
@@ -82,9 +101,12 @@ class SubEnvHost:
             first.observation_space, first.action_space, dict(first.metadata), first.render_mode
         )
 
-    def map(self, function: Callable[..., Any], arguments: dict[int, tuple]) -> dict[int, Any]:
-        """Returns {i: function(sub_env_i, *arguments[i])}, a `SubEnvFailure` where it raised."""
-        return self._vector._map(_guarded, {i: (function, args) for i, args in arguments.items()})
+    def map(self, call: bytes) -> bytes:
+        """For `call` = pack((function, arguments)), returns pack({i: function(sub_env_i,
+        *arguments[i])}), with a `SubEnvFailure` where it raised."""
+        function, arguments = unpack(call)
+        guarded = {i: (function, args) for i, args in arguments.items()}
+        return pack(self._vector._map(_guarded, guarded))
 
     def close(self) -> None:
         """Closes the sub-environments and stops the threads."""

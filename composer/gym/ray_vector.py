@@ -34,7 +34,7 @@ from typing import Any
 import gymnasium
 from gymnasium.vector import AutoresetMode
 
-from composer.gym._ray_host import HostSpec, SubEnvFailure, SubEnvHost
+from composer.gym._ray_host import HostSpec, SubEnvFailure, SubEnvHost, pack, unpack
 from composer.gym.batched import (
     BatchedVectorEnv,
     SubEnvironmentError,
@@ -107,7 +107,9 @@ class RayVectorEnv(BatchedVectorEnv):
       envs_per_actor: sub-environments per actor; None spreads them over the cluster's
         CPUs (ceil(num_envs / CPUs)).
       num_cpus_per_actor: CPUs Ray reserves for each actor; None for
-        min(1, CPUs / actors), so that every actor fits on the cluster.
+        min(1, CPUs / actors), so that every actor fits on an idle cluster. Ray starts
+        an actor only once that many CPUs are free, so with other actors about (another
+        vector env on the same machine, say) pass less, or 0.
       max_restarts: how many times each actor may be replaced after dying.
       autoreset_mode: an `AutoresetMode` (or its value); NEXT_STEP by default.
       copy: return copies of the observation arrays (see `BatchedVectorEnv`).
@@ -236,7 +238,7 @@ class RayVectorEnv(BatchedVectorEnv):
             k = i // self.envs_per_actor
             by_actor.setdefault(k, {})[i - k * self.envs_per_actor] = args
         replies, dead = self._gather(
-            {k: self._actors[k].map.remote(function, local) for k, local in by_actor.items()}
+            {k: self._call(k, function, local) for k, local in by_actor.items()}, unpack
         )
         for k in dead:
             self._replace(k)
@@ -255,17 +257,28 @@ class RayVectorEnv(BatchedVectorEnv):
         _raise_lowest(failures)
         return results
 
-    def _gather(self, pending: dict[int, Any]) -> tuple[dict[int, Any], list[int]]:
-        """Waits for every actor's reply; returns {actor: reply} and the actors that died."""
+    def _call(self, actor: int, function: Callable[..., Any], local: dict[int, tuple]):
+        """Starts `function` on actor number `actor`'s sub-environments; returns the
+        reference to its packed reply."""
+        return self._actors[actor].map.remote(pack((function, local)))
+
+    def _ray_get(self, reference) -> dict[int, Any]:
+        return unpack(self._ray.get(reference))
+
+    def _gather(
+        self, pending: dict[int, Any], read: Callable[[Any], Any] = lambda reply: reply
+    ) -> tuple[dict[int, Any], list[int]]:
+        """Waits for every actor's reply; returns {actor: read(reply)} and the actors that
+        died."""
         ray = self._ray
         try:
-            return dict(zip(pending, ray.get(list(pending.values())))), []
+            return dict(zip(pending, map(read, ray.get(list(pending.values()))))), []
         except ray.exceptions.RayActorError:
             pass
         replies, dead = {}, []
         for k, reference in pending.items():
             try:
-                replies[k] = ray.get(reference)
+                replies[k] = read(ray.get(reference))
             except ray.exceptions.RayActorError:
                 dead.append(k)
         return replies, dead
@@ -296,8 +309,8 @@ class RayVectorEnv(BatchedVectorEnv):
             # Only NEXT_STEP leaves an ended episode to be reset on the next step.
             due = {i for i, (_, _, episode_over) in local.items() if episode_over}
             to_reset = set(local) if mode is AutoresetMode.SAME_STEP else due
-            resets = self._ray.get(
-                self._actors[actor].map.remote(reset_sub_env, dict.fromkeys(to_reset, (None, None)))
+            resets = self._ray_get(
+                self._call(actor, reset_sub_env, dict.fromkeys(to_reset, (None, None)))
             )
             last = {i: read_row(self._observations, start + i) for i in local}
             outcomes = {}
@@ -309,7 +322,7 @@ class RayVectorEnv(BatchedVectorEnv):
                 else:
                     outcomes[i] = SubEnvOutcome(last[i], 0.0, False, True, {"restarted": True})
             return outcomes
-        reply = self._ray.get(self._actors[actor].map.remote(function, local))
+        reply = self._ray_get(self._call(actor, function, local))
         if function is reset_sub_env:
             return {i: _mark_restarted(outcome) for i, outcome in reply.items()}
         return reply

@@ -179,6 +179,13 @@ def test_an_exception_inside_a_sub_env_names_its_index_and_reset_recovers(ray, c
     assert envs.restarts == [0, 0]
 
 
+def test_call_and_set_attr_carry_values_plain_pickle_cannot_such_as_a_lambda(ray, closing):
+    envs = closing(RayVectorEnv(_counters([3, 3, 3]), envs_per_actor=2))
+    envs.set_attr("scale", [lambda x: x * 2, lambda x: x * 3, lambda x: x * 4])
+    assert envs.call("scale", 5) == (10, 15, 20)
+    assert envs.get_attr("_length") == (3, 3, 3)
+
+
 def test_a_factory_that_raises_names_its_sub_env(ray):
     def broken():
         raise OSError("no such model")
