@@ -22,6 +22,7 @@ pytestmark = pytest.mark.ray
 
 _HERE = pathlib.Path(__file__).resolve().parent
 _EXAMPLE = _HERE.parents[2] / "examples" / "ray_rollouts.py"
+_README = _HERE.parents[2] / "README.md"
 
 
 @pytest.fixture(scope="module")
@@ -49,6 +50,23 @@ def closing():
 
 def _counters(lengths, **kwargs):
     return [functools.partial(CounterEnv, length, **kwargs) for length in lengths]
+
+
+def _kill(ray, actor):
+    """Kills `actor` and waits until it is dead (`ray.kill` only sends the request)."""
+    ray.kill(actor)
+    _wait_until_dead(ray, actor)
+
+
+def _wait_until_dead(ray, actor):
+    deadline = time.monotonic() + 30
+    while time.monotonic() < deadline:
+        try:
+            ray.get(actor.__ray_ready__.remote(), timeout=10)
+        except ray.exceptions.RayActorError:
+            return
+        time.sleep(0.02)
+    raise AssertionError(f"{actor} still alive after 30 s")
 
 
 def _slider():
@@ -119,7 +137,7 @@ def test_a_killed_actor_is_restarted_and_only_its_sub_envs_report_truncation(ray
         vector.reset(seed=0)
         vector.step(zeros)
         vector.step(zeros)
-    ray.kill(envs.actors[1])
+    _kill(ray, envs.actors[1])
     observations, rewards, terminated, truncated, infos = envs.step(zeros)
     expected = reference.step(zeros)
     assert observations[:2].tolist() == expected[0][:2].tolist()
@@ -145,7 +163,7 @@ def test_a_killed_actor_in_same_step_mode_returns_reset_and_final_observations(r
     envs = closing(RayVectorEnv(_counters([5, 5]), envs_per_actor=1, autoreset_mode="SameStep"))
     envs.reset(seed=[1, 2])
     envs.step(np.zeros((2, 1)))
-    ray.kill(envs.actors[0])
+    _kill(ray, envs.actors[0])
     observations, rewards, terminated, truncated, infos = envs.step(np.zeros((2, 1)))
     assert observations[:, 0].tolist() == [0, 202]
     assert truncated.tolist() == [True, False]
@@ -157,7 +175,7 @@ def test_a_killed_actor_in_same_step_mode_returns_reset_and_final_observations(r
 def test_an_actor_that_dies_more_than_max_restarts_times_raises(ray, closing):
     envs = closing(RayVectorEnv(_counters([5, 5]), envs_per_actor=2, max_restarts=0))
     envs.reset(seed=0)
-    ray.kill(envs.actors[0])
+    _kill(ray, envs.actors[0])
     with pytest.raises(RuntimeError, match="sub-environments 0 to 1 died 1 times; max_restarts"):
         envs.step(np.zeros((2, 1)))
 
@@ -204,6 +222,15 @@ def test_the_ray_rollouts_example_collects_episodes_and_prints_throughput(ray, c
     assert re.search(r"^[23] episodes, \d+ steps in [\d.]+ s: \d+ steps/s", printed, re.M)
 
 
+def test_the_readme_scale_out_with_ray_example_runs_as_written(ray):
+    text = _README.read_text()
+    code = re.search(r"## Scale out with Ray\n[^#]*?```python\n(.*?)```", text, re.S).group(1)
+    namespace = {}
+    exec(compile(code, str(_README), "exec"), namespace)
+    assert namespace["rewards"].shape == (8,)
+    assert namespace["envs"].closed
+
+
 def test_close_kills_every_actor_and_frees_their_cpus(ray, closing):
     envs = closing(RayVectorEnv(_counters([3, 3]), envs_per_actor=1))
     actors = envs.actors
@@ -211,8 +238,7 @@ def test_close_kills_every_actor_and_frees_their_cpus(ray, closing):
     assert envs.num_cpus_per_actor == 1.0
     envs.close()
     for actor in actors:
-        with pytest.raises(ray.exceptions.RayActorError):
-            ray.get(actor.build.remote(), timeout=30)
+        _wait_until_dead(ray, actor)
     deadline = time.monotonic() + 30
     while ray.available_resources().get("CPU", 0) < 2 and time.monotonic() < deadline:
         time.sleep(0.1)
