@@ -50,6 +50,17 @@ class AttributeArray(np.ndarray):
                 target._written()
         return out[0] if len(out) == 1 else out
 
+    def __array_function__(self, func, types, args, kwargs):
+        # np.copyto, np.put, np.place, np.putmask, ... write without item assignment or a
+        # ufunc. Attribute arrays hold a few numbers, so compare them before and after.
+        watched = [a for a in (*args, *kwargs.values()) if isinstance(a, AttributeArray)]
+        before = [a.tobytes() for a in watched]
+        result = super().__array_function__(func, types, args, kwargs)
+        for array, old in zip(watched, before):
+            if array.tobytes() != old:
+                array._written()
+        return result
+
     def fill(self, value) -> None:
         super().fill(value)
         self._written()

@@ -93,3 +93,22 @@ def test_in_place_write_after_cached_writes_reaches_nested_element_text():
     inner.rgba[1] = 0.5
     assert 'rgba="0 0.5 1 1"' in root.to_xml_string()
     assert 'rgba="0 0.5 1 1"' in body.to_xml_string()
+
+
+def test_numpy_functions_that_write_in_place_update_element():
+    root, geom = _model_with_geom()
+    before = root.modification_count
+    np.copyto(geom.rgba, [0.1, 0.2, 0.3, 0.4])
+    assert 'rgba="0.1 0.2 0.3 0.4"' in geom.to_xml_string()
+    assert root.modification_count > before
+    np.put(geom.rgba, [3], [1])
+    np.putmask(geom.size, geom.size > 0, 0.25)
+    assert 'size="0.25" rgba="0.1 0.2 0.3 1"' in geom.to_xml_string()
+
+
+def test_numpy_functions_that_only_read_leave_element_unmodified():
+    root, geom = _model_with_geom()
+    before = root.modification_count
+    assert float(np.sum(geom.rgba)) == 2.0
+    assert np.concatenate([geom.rgba, geom.rgba]).shape == (8,)
+    assert root.modification_count == before
