@@ -45,6 +45,27 @@ def _positive_int(name: str, value) -> int:
     return int(value)
 
 
+def _collected(observables) -> tuple:
+    """The names and observable objects of `task.observables` (a dict or a list of dicts)."""
+    dicts = (observables,) if isinstance(observables, dict) else observables
+    return type(observables), tuple((type(d), tuple(d.items())) for d in dicts)
+
+
+def _same_collection(first: tuple, second: tuple | None) -> bool:
+    """Whether two `_collected` results hold the same names and the very same observables."""
+    if second is None or first[0] is not second[0] or len(first[1]) != len(second[1]):
+        return False
+    for (first_type, first_items), (second_type, second_items) in zip(first[1], second[1]):
+        if first_type is not second_type or len(first_items) != len(second_items):
+            return False
+        for (first_name, first_observable), (second_name, second_observable) in zip(
+            first_items, second_items
+        ):
+            if first_name != second_name or first_observable is not second_observable:
+                return False
+    return True
+
+
 class Environment(dm_env.Environment):
     """Runs a `composer.Task` as a `dm_env.Environment`.
 
@@ -132,6 +153,9 @@ class Environment(dm_env.Environment):
         self._physics = None
         self._physics_proxy = None
         self._snapshot = None
+        self._observation_updater = None
+        self._n_sub_steps = None
+        self._collected_observables = None
         self._compiled_modification_count = None
         self._reset_next_step = True
         self._episode_mjcf_prepared = False
@@ -247,11 +271,23 @@ class Environment(dm_env.Environment):
             self._data = physics.data.ptr
             self._ctrl = self._data.ctrl
             self._snapshot = ModelSnapshot(physics.model.ptr) if snapshots_supported() else None
+            self._observation_updater = None
         self._hooks.refresh_entity_hooks()
         self._run_after_compile_hooks()
         self._check_action = action_validator(self._task.action_spec(self._physics_proxy))
-        self._n_sub_steps = self._task_sub_steps()
-        self._observation_updater = self._make_observation_updater()
+        n_sub_steps = self._task_sub_steps()
+        observables = self._task.observables
+        collected = _collected(observables)
+        # The updater is rebuilt unless the Physics, the sub-steps and the collected
+        # observables are all the same; resetting it then gives the same observations.
+        if (
+            self._observation_updater is None
+            or n_sub_steps != self._n_sub_steps
+            or not _same_collection(collected, self._collected_observables)
+        ):
+            self._n_sub_steps = n_sub_steps
+            self._observation_updater = self._make_observation_updater(observables)
+        self._collected_observables = collected
 
     def _restore_compiled_model(self) -> None:
         """Puts the compiled model back as it was right after compiling.
@@ -265,7 +301,7 @@ class Environment(dm_env.Environment):
         n_sub_steps = self._task_sub_steps()
         if n_sub_steps != self._n_sub_steps:
             self._n_sub_steps = n_sub_steps
-            self._observation_updater = self._make_observation_updater()
+            self._observation_updater = self._make_observation_updater(self._task.observables)
 
     def _run_after_compile_hooks(self) -> None:
         # The hooks may set state, so they run inside a reset context; a divergence
@@ -283,9 +319,9 @@ class Environment(dm_env.Environment):
             return self._overridden_n_sub_steps
         return self._task.physics_steps_per_control_step
 
-    def _make_observation_updater(self) -> observation.Updater:
+    def _make_observation_updater(self, observables) -> observation.Updater:
         return observation.Updater(
-            self._task.observables,
+            observables,
             self._n_sub_steps,
             self._strip_singleton_obs_buffer_dim,
             self._pad_with_initial_value,
