@@ -139,6 +139,28 @@ def _layout(model: mujoco.MjModel) -> tuple:
     return _size_getter()(model)
 
 
+# The MjModel structs a snapshot saves besides the buffer. Bindings before mujoco 3.16 give
+# them no setter: they are then copied field by field (about 100 µs instead of 0.2 µs).
+_STRUCTS = ("opt", "vis", "stat")
+_STRUCTS_ASSIGNABLE = all(getattr(mujoco.MjModel, name).fset is not None for name in _STRUCTS)
+
+
+def _copy_struct(target, source) -> None:
+    """Copies every field of MuJoCo struct `source` into `target` in place, nested ones too."""
+    for name in dir(source):
+        if name.startswith("_"):
+            continue
+        value = getattr(source, name)
+        if isinstance(value, type):
+            continue
+        if isinstance(value, np.ndarray):
+            getattr(target, name)[...] = value
+        elif isinstance(value, (int, float)):
+            setattr(target, name, value)
+        else:
+            _copy_struct(getattr(target, name), value)
+
+
 class ModelSnapshot:
     """The parameters of one compiled `mujoco.MjModel`, restorable in place.
 
@@ -180,9 +202,14 @@ class ModelSnapshot:
         """Writes the saved parameters back into the model."""
         np.copyto(self._buffer, self._saved_buffer)
         model = self._model
-        model.opt = self._opt
-        model.vis = self._vis
-        model.stat = self._stat
+        if _STRUCTS_ASSIGNABLE:
+            model.opt = self._opt
+            model.vis = self._vis
+            model.stat = self._stat
+        else:
+            _copy_struct(model.opt, self._opt)
+            _copy_struct(model.vis, self._vis)
+            _copy_struct(model.stat, self._stat)
 
     def load(self, other: mujoco.MjModel) -> bool:
         """Takes `other`'s parameters as this snapshot's, and restores them into the model.

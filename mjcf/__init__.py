@@ -5,6 +5,12 @@ load them with `mjcf.from_path` / `from_xml_string` / `from_file`, compose them 
 `attach`, and simulate them with `mjcf.Physics.from_mjcf_model`.
 """
 
+from mjcf import mujoco_compat
+
+# Before any module that reads the installed MuJoCo's tables: an unsupported release gets
+# one clear ImportError.
+mujoco_compat.check_version()
+
 from mjcf import constants, traversal_utils
 from mjcf.asset import Asset
 from mjcf.constants import PREFIX_SEPARATOR

@@ -22,9 +22,15 @@ from mjcf.attribute_types import (
 )
 
 
-def _enum_words(enum_name: str, prefix: str, spellings=None, below=None) -> Keyword:
-    """Keyword values from a MuJoCo enum, lowercased as the XML reader spells most of them."""
-    enum = getattr(mujoco, enum_name)
+def _enum_words(enum_name: str, prefix: str, spellings=None, below=None) -> AttributeType:
+    """Keyword values from a MuJoCo enum, lowercased as the XML reader spells most of them.
+
+    A string where the installed MuJoCo has no such enum: it then has no attribute that
+    takes these words either (the schema says which attributes exist).
+    """
+    enum = getattr(mujoco, enum_name, None)
+    if enum is None:
+        return _STRING
     words = []
     for name in dir(enum):
         if not name.startswith(prefix):

@@ -18,7 +18,7 @@ import difflib
 import mujoco
 import numpy as np
 
-from mjcf import field_layout
+from mjcf import field_layout, mujoco_compat
 from mjcf.field_layout import MODEL, Family, ModelLayout
 
 # MjData fields that are simulation inputs, named after the components of MuJoCo's state.
@@ -265,6 +265,9 @@ class Binding:
     def _ref(self, name: str) -> field_layout.FieldRef:
         ref = self._family.fields.get(name)
         if ref is None:
+            missing = mujoco_compat.missing_binding(self._family.namespace, name)
+            if missing:
+                raise AttributeError(f"{self._label} has no attribute {name!r}: {missing}")
             close = difflib.get_close_matches(name, self._family.fields, n=3)
             hint = f"; did you mean {', '.join(close)}?" if close else ""
             raise AttributeError(f"{self._label} has no attribute {name!r}{hint}")

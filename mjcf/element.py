@@ -7,7 +7,15 @@ import os
 
 import numpy as np
 
-from mjcf import attribute_array, attribute_types, constants, element_list, schema, scoped_lookup
+from mjcf import (
+    attribute_array,
+    attribute_types,
+    constants,
+    element_list,
+    mujoco_compat,
+    schema,
+    scoped_lookup,
+)
 from mjcf.asset import Asset
 from mjcf.namescope import UNNAMED_MODEL, NameScope
 
@@ -266,6 +274,9 @@ class Element:
         return sorted(names)
 
     def _unknown_message(self, name: str) -> str:
+        missing = mujoco_compat.missing_mjcf(self._spec.path, name)
+        if missing:
+            return f"{self._describe()} has no attribute or child {name!r}: {missing}"
         known = list(self._spec.python_attributes) + list(self._allowed_children())
         return f"{self._describe()} has no attribute or child {name!r}{_close_matches(name, known)}"
 
@@ -471,6 +482,11 @@ class Element:
             raise RuntimeError(f"{self._describe()} has been removed from its model")
         child_spec = self._allowed_children().get(element_name)
         if child_spec is None:
+            missing = mujoco_compat.missing_mjcf(self._spec.path, element_name)
+            if missing:
+                raise AttributeError(
+                    f"{self._describe()} cannot have a child <{element_name}>: {missing}"
+                )
             # AttributeError, as dm_control raises for a tag that is not a valid child.
             raise AttributeError(
                 f"{self._describe()} cannot have a child <{element_name}>"

@@ -9,10 +9,12 @@ is picked up without a change here.
 """
 
 import dataclasses
+import re
 from collections.abc import Sequence
 
 import mujoco
 import numpy as np
+from mujoco.introspect import ast_nodes as _ast_nodes
 from mujoco.introspect import structs as _introspect
 
 MODEL = "model"
@@ -97,11 +99,29 @@ class Family:
     fields: dict
 
 
+# A pointer field's size as its doc comment gives it: "(nv x mjNREF)", "(ngeom x 1)".
+_DOC_EXTENT = re.compile(r"\((n\w+) x (\w+)\)")
+
+
+def _extent_from_doc(field) -> tuple | None:
+    """The extents of a pointer field that `introspect` left without (mujoco 3.3.0 does so
+    for `dof_solref`, `geom_margin` and a few more), read from its doc comment."""
+    if not isinstance(field.type, _ast_nodes.PointerType):
+        return None
+    match = _DOC_EXTENT.search(field.doc)
+    if match is None:
+        return None
+    count, width = match.groups()
+    if width == "1":
+        return (count,)
+    return (count, int(width) if width.isdigit() else width)
+
+
 def _array_extents(struct_name: str, python_type: type) -> dict:
     """Field name -> extents for every array field the Python bindings expose."""
     extents = {}
     for field in _introspect.STRUCTS[struct_name].fields:
-        extent = getattr(field, "array_extent", None)
+        extent = getattr(field, "array_extent", None) or _extent_from_doc(field)
         if extent and isinstance(extent[0], str) and hasattr(python_type, field.name):
             extents[field.name] = tuple(extent)
     return extents

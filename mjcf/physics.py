@@ -433,10 +433,9 @@ class Physics:
 
     def copy(self, share_model: bool = False) -> "Physics":
         """A new Physics with a copy of this data; the model is copied unless ``share_model``."""
-        sim = self._sim
-        model = sim.model if share_model else copy_module.copy(sim.model)
-        data = mujoco.MjData(model)
-        mujoco.mj_copyData(data, model, sim.data)
+        # MjData's copy shares its model; its deep copy copies the model too.
+        copier = copy_module.copy if share_model else copy_module.deepcopy
+        data = copier(self._sim.data)
         new = self.__class__.__new__(self.__class__)
         new._load(data, self._mjcf_model)
         new.legacy_step = self.legacy_step

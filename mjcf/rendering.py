@@ -95,6 +95,15 @@ class Renderers:
         key = (int(height), int(width))
         renderer = self._renderers.get(key)
         if renderer is None:
+            # Checked here, not left to mujoco.Renderer: before mujoco 3.8 its own check
+            # left a half-built Renderer whose finaliser raised.
+            buffer = self._model.vis.global_
+            if key[0] > buffer.offheight or key[1] > buffer.offwidth:
+                raise ValueError(
+                    f"image of height {key[0]} and width {key[1]} exceeds the model's "
+                    f"offscreen buffer ({buffer.offheight} by {buffer.offwidth}); raise "
+                    "<visual><global offheight=... offwidth=.../></visual> in the model"
+                )
             renderer = mujoco.Renderer(self._model, height=key[0], width=key[1])
             self._renderers[key] = renderer
         return renderer

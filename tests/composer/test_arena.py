@@ -53,10 +53,11 @@ def test_attach_offset_with_position_places_the_entity():
 
 def test_attach_offset_with_position_and_quaternion_orients_the_entity():
     arena, box = composer.Arena(), Box()
-    quaternion = [np.cos(0.25), 0, 0, np.sin(0.25)]
+    quaternion = [np.cos(0.25), 0, 0, np.sin(0.25)]  # 0.5 rad about z
     arena.attach_offset(box, [0, 0, 1, *quaternion])
     physics = mjcf.Physics.from_mjcf_model(arena.mjcf_model)
-    np.testing.assert_allclose(physics.bind(box.geom).xquat, quaternion)
+    c, s = np.cos(0.5), np.sin(0.5)
+    np.testing.assert_allclose(physics.bind(box.geom).xmat, [c, -s, 0, s, c, 0, 0, 0, 1])
 
 
 def test_attach_offset_with_wrong_number_of_values_is_an_error():

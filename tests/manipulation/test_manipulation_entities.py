@@ -1,5 +1,6 @@
 """The arm, hand, props and arena as composer entities: names, attachment, observables."""
 
+import mujoco
 import numpy as np
 import pytest
 
@@ -77,6 +78,30 @@ def test_arm_joints_pos_is_the_sine_and_cosine_of_each_joint_angle():
     np.testing.assert_allclose(observed[:, 1], np.cos(angles))
 
 
+def _split_step_sets_torque_sensors() -> bool:
+    """Whether `mj_step2` (which `Physics.step` runs) computes torque sensors: mujoco
+    3.5.0's leaves them at zero; `mj_forward` at the same state gives the true reading."""
+    model = mujoco.MjModel.from_xml_string(
+        '<mujoco><option integrator="implicitfast"/><worldbody><body>'
+        '<joint name="hinge" axis="0 1 0" damping="1"/><site name="pivot"/>'
+        '<geom type="capsule" fromto="0 0 0 0.5 0 0" size="0.05" mass="1"/></body>'
+        '</worldbody><actuator><velocity joint="hinge" kv="100"/></actuator>'
+        '<sensor><torque site="pivot"/></sensor></mujoco>'
+    )
+    data = mujoco.MjData(model)
+    for _ in range(200):
+        mujoco.mj_step2(model, data)
+        mujoco.mj_step1(model, data)
+    stepped = data.sensordata.copy()
+    mujoco.mj_forward(model, data)
+    return bool(np.allclose(stepped, data.sensordata, rtol=0.01))
+
+
+@pytest.mark.skipif(
+    not _split_step_sets_torque_sensors(),
+    reason=f"mujoco {mujoco.__version__}'s mj_step2 leaves torque sensors at zero "
+    "(a MuJoCo bug of 3.5.0, fixed in 3.6.0)",
+)
 def test_arm_joints_torque_matches_the_servo_torques_when_the_arm_holds_still():
     scene = _Scene()
     physics = _physics(scene)

@@ -60,10 +60,11 @@ def test_binding_a_frame_says_frames_have_no_fields():
 def test_mjcf_with_frames_written_by_mujoco_compiles_to_the_same_model():
     spec = mujoco.MjSpec()
     frame = spec.worldbody.add_frame(name="tilt", pos=[0.5, 0, 0], euler=[0, 0, 90])
-    body = frame.add_body(name="arm", pos=[1, 0, 0])
+    body = spec.worldbody.add_body(name="arm", pos=[1, 0, 0])
+    body.set_frame(frame)
     body.add_joint(name="hinge")
     body.add_geom(size=[0.1, 0, 0])
-    frame.add_geom(size=[0.2, 0, 0])
+    spec.worldbody.add_geom(size=[0.2, 0, 0]).set_frame(frame)
     expected = spec.compile()
 
     root = mjcf.from_xml_string(spec.to_xml())

@@ -101,7 +101,7 @@ def test_camera_index_out_of_range_is_an_error(physics):
 
 
 def test_image_larger_than_the_offscreen_buffer_is_an_error(physics):
-    with pytest.raises(ValueError):
+    with pytest.raises(ValueError, match="height 480 and width 640 exceeds.*offscreen buffer"):
         physics.render(height=480, width=640)
 
 

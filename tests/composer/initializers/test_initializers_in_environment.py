@@ -85,7 +85,9 @@ def test_each_episode_recompiles_new_sizes_and_colours_and_places_boxes_apart():
 
 
 def test_impossible_placement_fails_reset_after_the_allowed_attempts():
-    task = _ClutterTask(num_boxes=3, region_half_width=0.0)
+    # Nearly, not exactly, the same spot for every box: mujoco 3.9.0's box-box collider
+    # finds 9 contacts for exactly concentric boxes and stops with a FatalError.
+    task = _ClutterTask(num_boxes=3, region_half_width=0.01)
     env = composer.Environment(task, random_state=0, max_reset_attempts=2)
     with pytest.raises(composer.EpisodeInitializationError, match="no non-penetrating pose"):
         env.reset()
