@@ -448,19 +448,19 @@ class Environment(dm_env.Environment):
 
     def _substeps_with_hooks(self, action) -> int:
         """Steps the physics one sub-step at a time, calling the sub-step hooks around each."""
-        hooks = self._hooks
-        physics = self._physics_proxy
-        random_state = self._random_state
+        before, after = self._hooks.substep_calls(self._physics_proxy, action, self._random_state)
         updater = self._observation_updater
-        sample_steps = updater.sample_steps
+        sample_steps = frozenset(updater.sample_steps)
         n_sub_steps = self._n_sub_steps
         step = self._physics.step
         done = 0
         for sub_step in range(1, n_sub_steps + 1):
-            hooks.before_substep(physics, action, random_state)
+            for call in before:
+                call()
             step()
-            hooks.after_substep(physics, random_state)
-            if sub_step < n_sub_steps and sub_step in sample_steps:
+            for call in after:
+                call()
+            if sub_step in sample_steps and sub_step < n_sub_steps:
                 updater.update(sub_step - done)
                 done = sub_step
         return n_sub_steps - done
