@@ -91,7 +91,12 @@ class Distribution(base.Variation):
             # Constant parameters evaluate to themselves: skip the traversal (this runs
             # once per sample when the distribution corrupts an observable).
             args, kwargs = self._args, self._kwargs
-        target_shape = None if initial_value is None else np.shape(initial_value)
+        if initial_value is None:
+            target_shape = None
+        elif type(initial_value) is np.ndarray:
+            target_shape = initial_value.shape
+        else:
+            target_shape = np.shape(initial_value)
         size = None if self._single_sample else target_shape
         sampler = self._callable(_random_state(random_state))
         try:
