@@ -156,10 +156,10 @@ class Environment(dm_env.Environment):
         self._observation_updater = None
         self._n_sub_steps = None
         self._collected_observables = None
-        self._compiled_modification_count = None
+        self._compiled_count = None
         self._reset_next_step = True
         self._episode_mjcf_prepared = False
-        self._compile()
+        self._update_model()
         self._observation_updater.reset(self._physics_proxy, self._random_state)
         self._fixed_random_state = self._random_state.get_state() if fixed_initial_state else None
 
@@ -251,57 +251,66 @@ class Environment(dm_env.Environment):
 
     # Compiling.
 
-    def _compile(self) -> None:
-        """Compiles the root model and sets up everything that uses the compiled model.
+    def _update_model(self) -> None:
+        """Brings the compiled model up to date with the MJCF tree, as a fresh compile would.
 
-        When the new model differs from the current one only in parameter values
-        (colours, sizes, masses, ...), its parameters are loaded into the current
-        model in place and the current Physics, its data and bindings are kept.
+        The one place that decides what a reset (and construction) does to the model.
+        dm_control recompiles every episode; each of the three outcomes here gives the
+        same model, and the cheapest one that is exact is taken:
+
+        1. Restore: the MJCF tree is unchanged since the last compile (its
+           `modification_count`) and the compiled model has a `ModelSnapshot`. The
+           parameters saved right after compiling are written back, undoing writes made
+           through `physics.bind` during the episode. Nothing is compiled; the action
+           check stays; the observation updater is rebuilt only if the sub-steps changed.
+        2. Load parameters: the tree changed, but its new compile has the same structure
+           as the current model (`ModelSnapshot.load`: only float parameters such as
+           colours, sizes and masses differ). They are loaded into the current model in
+           place, so the Physics, its data and its bindings stay valid.
+        3. New Physics: the structure changed, snapshots are not supported, or there is
+           no model yet.
+
+        After 2 and 3, hooks are rescanned, the action check is rebuilt and the
+        observation updater is rebuilt unless the Physics, the sub-steps and the collected
+        observables are all the same (see `_same_collection`). After every outcome the
+        `after_compile` hooks run.
         """
         root = self._task.root_entity.mjcf_model
+        if self._snapshot is not None and root.modification_count == self._compiled_count:
+            self._snapshot.restore()
+            self._run_after_compile_hooks()
+            if self._task_sub_steps() != self._n_sub_steps:
+                self._rebuild_observation_updater(self._task.observables)
+            return
         model = compile_mjcf_model(root)
-        self._compiled_modification_count = root.modification_count
+        self._compiled_count = root.modification_count
         if self._snapshot is None or not self._snapshot.load(model):
-            physics = mjcf.Physics.from_compiled_mjcf_model(root, model)
-            if self._physics is not None:
-                self._physics.free()
-            physics.legacy_step = self._legacy_step
-            self._physics = physics
-            self._physics_proxy = weakref.proxy(physics)
-            self._data = physics.data.ptr
-            self._ctrl = self._data.ctrl
-            self._snapshot = ModelSnapshot(physics.model.ptr) if snapshots_supported() else None
-            self._observation_updater = None
+            self._replace_physics(root, model)
         self._hooks.refresh_entity_hooks()
         self._run_after_compile_hooks()
         self._check_action = action_validator(self._task.action_spec(self._physics_proxy))
-        n_sub_steps = self._task_sub_steps()
         observables = self._task.observables
         collected = _collected(observables)
-        # The updater is rebuilt unless the Physics, the sub-steps and the collected
-        # observables are all the same; resetting it then gives the same observations.
         if (
             self._observation_updater is None
-            or n_sub_steps != self._n_sub_steps
+            or self._task_sub_steps() != self._n_sub_steps
             or not _same_collection(collected, self._collected_observables)
         ):
-            self._n_sub_steps = n_sub_steps
-            self._observation_updater = self._make_observation_updater(observables)
+            self._rebuild_observation_updater(observables)
         self._collected_observables = collected
 
-    def _restore_compiled_model(self) -> None:
-        """Puts the compiled model back as it was right after compiling.
-
-        Everything built from the compiled model (Physics, bindings, action checks,
-        observation updater) stays valid; the after_compile hooks run again, as they
-        would after a real recompile.
-        """
-        self._snapshot.restore()
-        self._run_after_compile_hooks()
-        n_sub_steps = self._task_sub_steps()
-        if n_sub_steps != self._n_sub_steps:
-            self._n_sub_steps = n_sub_steps
-            self._observation_updater = self._make_observation_updater(self._task.observables)
+    def _replace_physics(self, root, model) -> None:
+        """Makes a new Physics for `model` the environment's, freeing the old one."""
+        physics = mjcf.Physics.from_compiled_mjcf_model(root, model)
+        if self._physics is not None:
+            self._physics.free()
+        physics.legacy_step = self._legacy_step
+        self._physics = physics
+        self._physics_proxy = weakref.proxy(physics)
+        self._data = physics.data.ptr
+        self._ctrl = self._data.ctrl
+        self._snapshot = ModelSnapshot(physics.model.ptr) if snapshots_supported() else None
+        self._observation_updater = None
 
     def _run_after_compile_hooks(self) -> None:
         # The hooks may set state, so they run inside a reset context; a divergence
@@ -319,17 +328,14 @@ class Environment(dm_env.Environment):
             return self._overridden_n_sub_steps
         return self._task.physics_steps_per_control_step
 
-    def _make_observation_updater(self, observables) -> observation.Updater:
-        return observation.Updater(
+    def _rebuild_observation_updater(self, observables) -> None:
+        self._n_sub_steps = self._task_sub_steps()
+        self._observation_updater = observation.Updater(
             observables,
             self._n_sub_steps,
             self._strip_singleton_obs_buffer_dim,
             self._pad_with_initial_value,
         )
-
-    def _model_changed_since_compile(self) -> bool:
-        root = self._task.root_entity.mjcf_model
-        return root.modification_count != self._compiled_modification_count
 
     # Resetting.
 
@@ -361,10 +367,7 @@ class Environment(dm_env.Environment):
         self._hooks.refresh_entity_hooks()
         if self._recompile_mjcf_every_episode or not self._episode_mjcf_prepared:
             self._hooks.initialize_episode_mjcf(self._random_state)
-            if self._snapshot is None or self._model_changed_since_compile():
-                self._compile()
-            else:
-                self._restore_compiled_model()
+            self._update_model()
             self._episode_mjcf_prepared = True
         with self._physics.reset_context():
             self._hooks.initialize_episode(self._physics_proxy, self._random_state)
