@@ -33,10 +33,10 @@ class GymnasiumEnv(gymnasium.Env):
     Args:
       env: the environment to wrap; seeding needs its `random_state` (an
         `np.random.RandomState`, as `composer.Environment` has), rendering its `physics`.
-      render_mode: None, 'rgb_array' or 'depth_array'. 'human' needs the interactive
-        viewer, which does not exist yet: asking for it raises (also through
-        `gymnasium.make`), and `metadata` does not list it, since Gymnasium's env checker
-        tries every listed mode.
+      render_mode: None, 'rgb_array' or 'depth_array'. 'human' raises (also through
+        `gymnasium.make`) and `metadata` does not list it, since Gymnasium's env checker
+        opens every listed mode and a window needs a display: `composer.viewer.launch`
+        shows an environment interactively.
       camera: the camera `render()` draws, by name or index; -1 is the free camera.
       width, height: the size of rendered images in pixels (at most the model's
         off-screen buffer, `<visual><global offwidth offheight>`).
@@ -65,8 +65,10 @@ class GymnasiumEnv(gymnasium.Env):
     ):
         if render_mode == "human":
             raise NotImplementedError(
-                "render_mode='human' needs the interactive viewer, which this version does "
-                "not have; use render_mode='rgb_array' and show the frames yourself"
+                "render_mode='human' is not offered: Gymnasium's env checker opens every "
+                "listed render mode, and a window needs a display; watch a composer "
+                "environment with composer.viewer.launch(env, policy), or use "
+                "render_mode='rgb_array'"
             )
         if render_mode is not None and render_mode not in _RENDER_MODES:
             raise ValueError(

@@ -8,6 +8,8 @@ import subprocess
 import sys
 import textwrap
 
+import mujoco
+import mujoco.viewer
 import numpy as np
 import pytest
 
@@ -179,6 +181,11 @@ def test_window_shows_scene_and_status_then_exits_cleanly_after_max_steps(displa
     # and the status box in its top-left corner: dark panel, white text.
     assert screen.std() > 20
     assert len(np.unique(screen)) > 20
+    if not hasattr(mujoco.viewer.Handle, "set_texts"):
+        pytest.skip(
+            f"mujoco {mujoco.__version__}'s viewer has no Handle.set_texts: the status is "
+            "logged instead of drawn, so there is no status box to look for"
+        )
     status_box = screen[:100, :130]
     assert status_box.min() < 60 and status_box.max() > 200
 

@@ -132,6 +132,6 @@ def test_threaded_vector_env_matches_gymnasiums_sync_vector_env_step_for_step():
         np.testing.assert_array_equal(ours, sync)
 
 
-def test_make_with_human_render_mode_says_the_viewer_is_missing():
-    with pytest.raises(NotImplementedError, match="interactive viewer"):
+def test_make_with_human_render_mode_points_to_the_viewer():
+    with pytest.raises(NotImplementedError, match="composer.viewer.launch"):
         gymnasium.make("composer/reach_site_features-v0", render_mode="human")

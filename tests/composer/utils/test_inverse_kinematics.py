@@ -184,3 +184,11 @@ def test_running_out_of_steps_logs_a_warning(physics):
         )
     warning.assert_called_once()
     assert "Failed to converge after 2 steps" in warning.call_args[0][0] % warning.call_args[0][1:]
+
+
+def test_nullspace_method_regularization_damps_only_the_diagonal():
+    # (J^T J + I) dq = J^T delta with J = [[1, 1], [0, 1]], delta = [1, 2]:
+    # [[2, 1], [1, 3]] dq = [1, 3]  ->  dq = [0, 1].
+    jac = np.array([[1.0, 1.0], [0.0, 1.0]])
+    step = inverse_kinematics.nullspace_method(jac, np.array([1.0, 2.0]), 1.0)
+    np.testing.assert_allclose(step, [0.0, 1.0], atol=1e-12)
