@@ -19,7 +19,6 @@ that a rangefinder does see a geom's colour.
 """
 
 import mujoco
-import numpy as np
 
 from mjcf.field_layout import MODEL_EXTENTS
 
@@ -44,12 +43,12 @@ APPEARANCE_FIELDS = frozenset(
 )
 
 # Sensors whose values MuJoCo computes by ray casting or by running user code.
-_SENSORS_READING_APPEARANCE = np.array(
-    [
+_SENSORS_READING_APPEARANCE = frozenset(
+    (
         int(mujoco.mjtSensor.mjSENS_RANGEFINDER),
         int(mujoco.mjtSensor.mjSENS_USER),
         int(mujoco.mjtSensor.mjSENS_PLUGIN),
-    ]
+    )
 )
 
 
@@ -59,6 +58,6 @@ def forward_neutral_fields(model: mujoco.MjModel) -> frozenset[str]:
     ``APPEARANCE_FIELDS``, or no field at all when ``model`` has plugins, user sensors or
     rangefinders (see the module docstring).
     """
-    if model.nplugin or np.isin(model.sensor_type, _SENSORS_READING_APPEARANCE).any():
+    if model.nplugin or not _SENSORS_READING_APPEARANCE.isdisjoint(model.sensor_type.tolist()):
         return frozenset()
     return APPEARANCE_FIELDS
