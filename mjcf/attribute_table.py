@@ -367,6 +367,7 @@ _BY_ELEMENT: dict[str, dict[str, AttributeType]] = {
         "height": _INT,
     },
     "hfield": {"size": _exact(4)},
+    "pair": {"friction": _floats(1, 5)},
     "numeric": {"size": _INT, "data": _floats(0)},
     "flexcomp": {"mesh": _STRING, "scale": _exact(3), "count": _ints(3, 3), "spacing": _exact(3)},
     "muscle": {"timeconst": _floats(1, 2), "range": _exact(2), "scale": _FLOAT},

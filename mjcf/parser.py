@@ -2,9 +2,12 @@
 
 from __future__ import annotations
 
+import math
 import os
+import re
 import zipfile
 
+import numpy as np
 from lxml import etree
 
 from mjcf import attribute_types, constants
@@ -13,6 +16,19 @@ from mjcf.scoped_lookup import lookup
 
 _INCLUDE = "include"
 _ESCAPED_SEP = constants.PREFIX_SEPARATOR_ESCAPE + constants.PREFIX_SEPARATOR
+# MuJoCo reads XML ints as 32-bit decimal integers and floats as C's strtod does: decimal,
+# hexadecimal ('0x1p3') or inf/infinity/nan, in any case; a finite number too large for a
+# double is an error.
+_XML_INT = re.compile(r"[+-]?[0-9]+\Z")
+_XML_HEX_FLOAT = re.compile(r"[+-]?0[xX]")
+_XML_NON_FINITE = re.compile(r"[+-]?(inf|infinity|nan)\Z", re.IGNORECASE)
+_INT32 = 2**31
+# How deep MuJoCo's XML reader (tinyxml2) lets elements nest, `<mujoco>` being level 1: a
+# childless element may sit one level deeper than any element with children. (An empty
+# element written with a closing tag counts as having children there; lxml cannot tell.)
+_MAX_DEPTH = 499
+# References whose empty value MuJoCo reads as a (missing) default class, not as unset.
+_CLASS_REFERENCES = ("class", "childclass")
 
 
 def from_xml_string(
@@ -34,9 +50,8 @@ def from_xml_string(
     """
     if isinstance(xml_string, str):
         xml_string = xml_string.encode("utf-8")
-    parser = etree.XMLParser(remove_comments=True, remove_blank_text=True)
     try:
-        document = etree.fromstring(xml_string, parser)
+        document = _parse_xml(xml_string)
     except etree.XMLSyntaxError as error:
         raise ValueError(f"invalid MJCF XML: {error}") from None
     return _build(document, escape_separators, model_dir, resolve_references, assets)
@@ -131,11 +146,31 @@ def _read_include(file_name: str, model_dir: str, assets: dict | None):
             ) from None
     if isinstance(text, str):
         text = text.encode("utf-8")
-    parser = etree.XMLParser(remove_comments=True, remove_blank_text=True)
     try:
-        return etree.fromstring(text, parser)
+        return _parse_xml(text)
     except etree.XMLSyntaxError as error:
         raise ValueError(f"<include file={file_name!r}>: invalid XML: {error}") from None
+
+
+def _parse_xml(text: bytes):
+    """The document's root; raises XMLSyntaxError, also when it nests deeper than MuJoCo reads.
+
+    lxml's own limit (256 levels) is below MuJoCo's, so it is lifted (`huge_tree`) and
+    MuJoCo's applied instead; libxml2 still stops at 2048 levels, before Python recursion
+    could.
+    """
+    parser = etree.XMLParser(remove_comments=True, remove_blank_text=True, huge_tree=True)
+    document = etree.fromstring(text, parser)
+    deepest = max(
+        (node for node in document.iter() if len(node) == 0),
+        key=lambda node: sum(1 for _ in node.iterancestors()),
+    )
+    depth = sum(1 for _ in deepest.iterancestors()) + 1
+    if depth > _MAX_DEPTH:
+        raise etree.XMLSyntaxError(
+            f"elements nest {depth} levels deep; MuJoCo reads at most {_MAX_DEPTH}", None, 0, 0
+        )
+    return document
 
 
 def _expand_includes(node, model_dir: str, assets, seen: tuple) -> None:
@@ -170,7 +205,7 @@ def _build(document, escape_separators, model_dir, resolve_references, assets) -
     sections = sorted(document, key=lambda child: child.tag != "compiler")
     for child in sections:
         _add_element(root, child, escape_separators)
-    if model_name is not None:
+    if model_name:  # MuJoCo reads an empty model name as unset
         root.model = model_name
     if resolve_references:
         resolve_reference_strings(root)
@@ -188,6 +223,13 @@ def _add_element(parent: Element, node, escape_separators: bool) -> None:
         raise ValueError(
             f"{parent._describe()} cannot have a child <{tag}>{_close_matches(tag, allowed)}"
         )
+    if tag == constants.DEFAULT and parent is parent._root and "class" in node.attrib:
+        if node.get("class") not in ("", "main"):
+            raise ValueError(
+                f"the top-level <default> is class 'main' and cannot be renamed, got "
+                f"class={node.get('class')!r}"
+            )
+        del node.attrib["class"]  # '' and 'main' both name the top-level class
     if spec.repeated:
         element = Element._create(spec, None, parent._root)
         _set_attributes(element, node, escape_separators)
@@ -202,7 +244,13 @@ def _add_element(parent: Element, node, escape_separators: bool) -> None:
         entry = element._identifier_entry()
         if entry is not None:
             element._root._namescope.add(entry[0], entry[1], element)
+    single = set()
     for child in node:
+        child_spec = element._allowed_children().get(child.tag)
+        if child_spec is not None and not child_spec.repeated and element is not element._root:
+            if child.tag in single:
+                raise ValueError(f"{element._describe()} may hold only one <{child.tag}>")
+            single.add(child.tag)
         _add_element(element, child, escape_separators)
 
 
@@ -214,13 +262,65 @@ def _set_attributes(element: Element, node, escape_separators: bool) -> None:
             raise ValueError(
                 f"{element._describe()} has no attribute {name!r}{_close_matches(name, attributes)}"
             )
-        kind = spec.type.kind
+        value_type = spec.type
+        kind = value_type.kind
+        if not value and (name == "name" or kind == attribute_types.REFERENCE):
+            if name not in _CLASS_REFERENCES:
+                continue  # MuJoCo reads an empty name or reference as unset
         if escape_separators and kind in (attribute_types.IDENTIFIER, attribute_types.REFERENCE):
             value = value.replace(constants.PREFIX_SEPARATOR, _ESCAPED_SEP)
         if kind == attribute_types.IDENTIFIER:
             element._attributes[name] = _checked_identifier(element, name, value)
+        elif isinstance(value_type, attribute_types.Keyword) and value not in value_type.values:
+            # The Python API matches keywords without regard to case; MuJoCo's XML does not.
+            raise ValueError(
+                f"{element._describe()} attribute {name!r}: expected {value_type.description}, "
+                f"got {value!r}"
+            )
+        elif isinstance(value_type, (attribute_types.Number, attribute_types.Array)):
+            integral = value_type.dtype in (int, np.int64)
+            numbers = _xml_numbers(element, name, value, integral)
+            if numbers:  # MuJoCo reads a blank number as unset
+                element._set_attribute(spec.python_name, numbers)
         else:
             element._set_attribute(spec.python_name, value)
+
+
+def _xml_numbers(element: Element, name: str, text: str, integral: bool) -> list:
+    """The numbers in an attribute's text, read as MuJoCo reads them."""
+    numbers = []
+    for token in text.split():
+        if integral:
+            number = int(token) if _XML_INT.match(token) else None
+            if number is not None and not -_INT32 <= number < _INT32:
+                raise ValueError(
+                    f"{element._describe()} attribute {name!r}: {token!r} is too large "
+                    "for a 32-bit int"
+                )
+        else:
+            number = _xml_float(token)
+            if number is not None and math.isinf(number) and not _XML_NON_FINITE.match(token):
+                raise ValueError(
+                    f"{element._describe()} attribute {name!r}: {token!r} is too large for a double"
+                )
+        if number is None:
+            kind = "an int" if integral else "a float"
+            raise ValueError(
+                f"{element._describe()} attribute {name!r}: expected {kind}, got {token!r}"
+            )
+        numbers.append(number)
+    return numbers
+
+
+def _xml_float(token: str) -> float | None:
+    if "_" in token:
+        return None  # Python's float() accepts digit separators; strtod does not
+    try:
+        if _XML_HEX_FLOAT.match(token):
+            return float.fromhex(token)
+        return float(token)
+    except ValueError:
+        return None
 
 
 def _checked_identifier(element: Element, name: str, value: str) -> str:

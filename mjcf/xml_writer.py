@@ -34,6 +34,8 @@ defaults of one model never leak into another.
 
 from __future__ import annotations
 
+import sys
+
 from mjcf import attribute_types, constants, schema, scoped_lookup, skin_file
 from mjcf.asset import Asset
 from mjcf.attachment import AttachmentFrame
@@ -50,7 +52,15 @@ _FULL_PRECISION = (17, 0)
 _DEFAULT = constants.DEFAULT
 _JOINT = constants.JOINT
 _MAIN = "main"
+_WORLD = "world"
+# Sections whose elements MuJoCo only ever finds by the name the user gave (or, for file
+# assets, by their file name): their unnamed elements are written unnamed.
+_NAMED_BY_USER = ("asset", "custom")
+_BODY = constants.BODY
 _TOP_ONLY_SECTIONS = ("statistic",)
+# Writing takes a few Python frames per level of nesting, and MuJoCo reads models up to 499
+# levels deep: more than Python's default limit of 1000 frames allows.
+_FRAMES_NEEDED = 4000
 # Top-level sections whose element text is only the model's own: the world (attached models
 # hang below attachment frames), defaults (scoped per model) and the global settings.
 _NOT_SHARED = (constants.WORLDBODY, constants.DEFAULT, *_TOP_ONLY_SECTIONS)
@@ -213,6 +223,9 @@ class _Writer:
                     return text
             target = scoped_lookup.lookup(root, namespace, value)
             if target is None:
+                if value == _WORLD and namespace == _BODY and not self.prefix_of(root):
+                    # MuJoCo's name for the world body, which the top model may refer to.
+                    return _WORLD
                 if element._spec.namespace is None and _in_defaults(element):
                     # MuJoCo only checks references of defaults that something uses.
                     return _escape(self.prefix_of(root) + value)
@@ -315,6 +328,10 @@ class _Writer:
             elif spec.namespace == _JOINT:
                 # An attachment frame's first unnamed joint is named after the frame.
                 name_text = f' name="{_escape(element._generated_name(prefix))}"'
+            elif element._parent._spec.name in _NAMED_BY_USER and "file" not in attributes:
+                # MuJoCo decides whether such an element needs a name (a material does, a
+                # skybox texture does not); a generated one would hide its error.
+                pass
             else:
                 auto_id = element._auto_id or element._unnamed_id()
                 name_text = f' name="{prefix or _SEP}{auto_id}"'
@@ -663,7 +680,30 @@ def _models_below(root: RootElement) -> list[RootElement]:
 def element_to_string(
     element: Element, prefix_root, self_close, pretty_print, precision, zero_threshold
 ) -> str:
-    """XML text of `element`; a RootElement gives a complete model with attachments merged."""
+    """XML text of `element`; a RootElement gives a complete model with attachments merged.
+
+    Raises:
+      ValueError: when the elements nest too deeply to write (far beyond what MuJoCo reads).
+    """
+    limit = sys.getrecursionlimit()
+    if limit < _FRAMES_NEEDED:
+        sys.setrecursionlimit(_FRAMES_NEEDED)
+    try:
+        return _element_to_string(
+            element, prefix_root, self_close, pretty_print, precision, zero_threshold
+        )
+    except RecursionError:
+        raise ValueError(
+            f"{element._describe()}: elements nest too deeply to write "
+            "(MuJoCo reads at most 499 levels)"
+        ) from None
+    finally:
+        sys.setrecursionlimit(limit)
+
+
+def _element_to_string(
+    element: Element, prefix_root, self_close, pretty_print, precision, zero_threshold
+) -> str:
     if prefix_root is None:
         prefix_root = element._root
     if isinstance(element, RootElement):
