@@ -223,7 +223,7 @@ def test_the_ray_rollouts_example_collects_episodes_and_prints_throughput(ray, c
 
 
 def test_the_readme_scale_out_with_ray_example_runs_as_written(ray):
-    text = _README.read_text()
+    text = _README.read_text(encoding="utf-8")
     code = re.search(r"## Scale out with Ray\n[^#]*?```python\n(.*?)```", text, re.S).group(1)
     namespace = {}
     exec(compile(code, str(_README), "exec"), namespace)
