@@ -46,7 +46,7 @@ _TARGETS = {
     "to_xml_string, one attribute changed": 0.5,
     "to_xml_string, unchanged": 0.5,
     "to_xml_string, named element added": 0.5,
-    "from_mjcf_model, first call": 1.3,
+    "from_mjcf_model, first call": 1.6,
     "from_mjcf_model, XML cached": 1.3,
     "from_mjcf_model, one attribute changed": 1.3,
     "bind(20 geoms).xpos": 3.0,

@@ -20,16 +20,24 @@ Rows:
     ceiling for min(N, cores) threads; the same for
     `gymnasium.vector.AsyncVectorEnv` (one process per sub-environment), and
     threaded / async (target > 1 at every N).
+  ray N: `RayVectorEnv` of N sub-environments in actors of N / cores sub-environments
+    (one actor per core, on a local Ray started by the benchmark), its
+    steps/s next to the loop's and the threaded env's from the same trials, ray /
+    threaded (target >= 0.7), and Ray's cost per vector step: 1 / (ray vector steps/s)
+    - 1 / (threaded vector steps/s), in ms. Skipped when Ray is not installed or with
+    --no-ray.
 
 Throughputs are medians over `--repeats` trials of `--steps` vector steps each, taken
 in turn so that load from other processes spreads over all rows; ratios are medians of
 the ratios within each trial. On a machine shared
 with other work the ratios are noisy.
 
-Usage: python benchmarks/vector_env.py [--steps N] [--repeats N] [--sizes 1,2,4,8]
+Usage: python benchmarks/vector_env.py [--steps N] [--repeats N] [--sizes 1,2,4,8] [--no-ray]
 """
 
 import argparse
+import importlib.util
+import math
 import os
 import pathlib
 import queue
@@ -46,11 +54,12 @@ import gymnasium  # noqa: E402
 import mujoco  # noqa: E402
 
 import manipulation  # noqa: E402
-from composer.gym import GymnasiumEnv, ThreadedVectorEnv  # noqa: E402
+from composer.gym import GymnasiumEnv, RayVectorEnv, ThreadedVectorEnv  # noqa: E402
 
 _TASK = "lift_brick_features"
 _ADAPTER_TARGET = 1.05
 _THREADED_TARGET = 1.6
+_RAY_TARGET = 0.7
 
 
 def _make_env() -> GymnasiumEnv:
@@ -204,9 +213,10 @@ def _vector_rate(envs: gymnasium.vector.VectorEnv, actions: list) -> float:
 
 
 class Throughput:
-    """Environment steps per second of one loop, a threaded and an async vector env."""
+    """Environment steps per second of one loop, a threaded and an async vector env, and
+    with `use_ray` a Ray vector env of one actor per core."""
 
-    def __init__(self, num_envs: int, steps: int):
+    def __init__(self, num_envs: int, steps: int, use_ray: bool):
         self.num_envs = num_envs
         self.single = _make_env()
         self.single.reset(seed=0)
@@ -217,11 +227,24 @@ class Throughput:
         self.single_actions = _actions(self.single.action_space, steps, seed=1)
         self.vector_actions = _actions(self.threaded.action_space, steps, seed=2)
         self.rates = {"loop": [], "threaded": [], "async": []}
+        self.ray = None
+        if use_ray:
+            cores = os.cpu_count() or 1
+            # No CPU reservation: the actors of every N live at once, on `cores` cores.
+            self.ray = RayVectorEnv(
+                [_make_env] * num_envs,
+                envs_per_actor=math.ceil(num_envs / cores),
+                num_cpus_per_actor=0,
+            )
+            self.ray.reset(seed=0)
+            self.rates["ray"] = []
 
     def trial(self) -> None:
         self.rates["loop"].append(_loop_rate(self.single, self.single_actions))
         self.rates["threaded"].append(_vector_rate(self.threaded, self.vector_actions))
         self.rates["async"].append(_vector_rate(self.asynchronous, self.vector_actions))
+        if self.ray is not None:
+            self.rates["ray"].append(_vector_rate(self.ray, self.vector_actions))
 
     def median(self, name: str) -> float:
         return statistics.median(self.rates[name])
@@ -235,6 +258,8 @@ class Throughput:
         self.single.close()
         self.threaded.close()
         self.asynchronous.close()
+        if self.ray is not None:
+            self.ray.close()
 
 
 def main() -> None:
@@ -242,9 +267,15 @@ def main() -> None:
     parser.add_argument("--steps", type=int, default=100, help="vector steps per trial")
     parser.add_argument("--repeats", type=int, default=5, help="trials per measurement")
     parser.add_argument("--sizes", default="1,2,4,8", help="numbers of sub-environments")
+    parser.add_argument("--no-ray", action="store_true", help="leave out the Ray rows")
     args = parser.parse_args()
     cores = os.cpu_count() or 1
     sizes = [int(size) for size in args.sizes.split(",")]
+    use_ray = not args.no_ray and importlib.util.find_spec("ray") is not None
+    if use_ray:
+        import ray
+
+        ray.init(num_cpus=cores, include_dashboard=False, log_to_driver=False)
 
     print(f"task {_TASK}, {cores} cores, ThreadedVectorEnv with one thread per core")
     adapter = adapter_ratio(args.steps * 2, args.repeats)
@@ -268,7 +299,7 @@ def main() -> None:
             f"running free, {lock_step:.2f}x in lock step"
         )
 
-    benches = [Throughput(size, args.steps) for size in sizes]
+    benches = [Throughput(size, args.steps, use_ray) for size in sizes]
     for _ in range(args.repeats):
         for bench in benches:
             bench.trial()
@@ -294,11 +325,39 @@ def main() -> None:
             f"{speedup:.2f}x | {speedup / ceiling:.0%} | "
             f"{bench.ratio('async', 'loop'):.2f}x | {bench.ratio('threaded', 'async'):.2f}x |"
         )
-        bench.close()
     print(
         f"\ntargets: threaded/loop >= {_THREADED_TARGET} at N = 2 on 2 cores; "
         "threaded/async > 1 at every N"
     )
+    if use_ray:
+        _print_ray_table(benches, cores)
+    for bench in benches:
+        bench.close()
+
+
+def _print_ray_table(benches: list[Throughput], cores: int) -> None:
+    print()
+    header = (
+        "N",
+        "envs per actor",
+        "loop steps/s",
+        "threaded steps/s",
+        "ray steps/s",
+        "ray/loop",
+        "ray/threaded",
+        "ray cost ms per vector step",
+    )
+    print("| " + " | ".join(header) + " |")
+    print("|" + "---|" * len(header))
+    for bench in benches:
+        loop, threaded, ray_rate = (bench.median(n) for n in ("loop", "threaded", "ray"))
+        cost = (bench.num_envs / ray_rate - bench.num_envs / threaded) * 1e3
+        print(
+            f"| {bench.num_envs} | {math.ceil(bench.num_envs / cores)} | {loop:.0f} | "
+            f"{threaded:.0f} | {ray_rate:.0f} | {bench.ratio('ray', 'loop'):.2f}x | "
+            f"{bench.ratio('ray', 'threaded'):.2f}x | {cost:.2f} |"
+        )
+    print(f"\ntarget: ray/threaded >= {_RAY_TARGET} with one actor per core")
 
 
 if __name__ == "__main__":

@@ -45,6 +45,27 @@ def _positive_int(name: str, value) -> int:
     return int(value)
 
 
+def _collected(observables) -> tuple:
+    """The names and observable objects of `task.observables` (a dict or a list of dicts)."""
+    dicts = (observables,) if isinstance(observables, dict) else observables
+    return type(observables), tuple((type(d), tuple(d.items())) for d in dicts)
+
+
+def _same_collection(first: tuple, second: tuple | None) -> bool:
+    """Whether two `_collected` results hold the same names and the very same observables."""
+    if second is None or first[0] is not second[0] or len(first[1]) != len(second[1]):
+        return False
+    for (first_type, first_items), (second_type, second_items) in zip(first[1], second[1]):
+        if first_type is not second_type or len(first_items) != len(second_items):
+            return False
+        for (first_name, first_observable), (second_name, second_observable) in zip(
+            first_items, second_items
+        ):
+            if first_name != second_name or first_observable is not second_observable:
+                return False
+    return True
+
+
 class Environment(dm_env.Environment):
     """Runs a `composer.Task` as a `dm_env.Environment`.
 
@@ -132,10 +153,13 @@ class Environment(dm_env.Environment):
         self._physics = None
         self._physics_proxy = None
         self._snapshot = None
-        self._compiled_modification_count = None
+        self._observation_updater = None
+        self._n_sub_steps = None
+        self._collected_observables = None
+        self._compiled_count = None
         self._reset_next_step = True
         self._episode_mjcf_prepared = False
-        self._compile()
+        self._update_model()
         self._observation_updater.reset(self._physics_proxy, self._random_state)
         self._fixed_random_state = self._random_state.get_state() if fixed_initial_state else None
 
@@ -227,45 +251,66 @@ class Environment(dm_env.Environment):
 
     # Compiling.
 
-    def _compile(self) -> None:
-        """Compiles the root model and sets up everything that uses the compiled model.
+    def _update_model(self) -> None:
+        """Brings the compiled model up to date with the MJCF tree, as a fresh compile would.
 
-        When the new model differs from the current one only in parameter values
-        (colours, sizes, masses, ...), its parameters are loaded into the current
-        model in place and the current Physics, its data and bindings are kept.
+        The one place that decides what a reset (and construction) does to the model.
+        dm_control recompiles every episode; each of the three outcomes here gives the
+        same model, and the cheapest one that is exact is taken:
+
+        1. Restore: the MJCF tree is unchanged since the last compile (its
+           `modification_count`) and the compiled model has a `ModelSnapshot`. The
+           parameters saved right after compiling are written back, undoing writes made
+           through `physics.bind` during the episode. Nothing is compiled; the action
+           check stays; the observation updater is rebuilt only if the sub-steps changed.
+        2. Load parameters: the tree changed, but its new compile has the same structure
+           as the current model (`ModelSnapshot.load`: only float parameters such as
+           colours, sizes and masses differ). They are loaded into the current model in
+           place, so the Physics, its data and its bindings stay valid.
+        3. New Physics: the structure changed, snapshots are not supported, or there is
+           no model yet.
+
+        After 2 and 3, hooks are rescanned, the action check is rebuilt and the
+        observation updater is rebuilt unless the Physics, the sub-steps and the collected
+        observables are all the same (see `_same_collection`). After every outcome the
+        `after_compile` hooks run.
         """
         root = self._task.root_entity.mjcf_model
+        if self._snapshot is not None and root.modification_count == self._compiled_count:
+            self._snapshot.restore()
+            self._run_after_compile_hooks()
+            if self._task_sub_steps() != self._n_sub_steps:
+                self._rebuild_observation_updater(self._task.observables)
+            return
         model = compile_mjcf_model(root)
-        self._compiled_modification_count = root.modification_count
+        self._compiled_count = root.modification_count
         if self._snapshot is None or not self._snapshot.load(model):
-            physics = mjcf.Physics.from_compiled_mjcf_model(root, model)
-            if self._physics is not None:
-                self._physics.free()
-            physics.legacy_step = self._legacy_step
-            self._physics = physics
-            self._physics_proxy = weakref.proxy(physics)
-            self._data = physics.data.ptr
-            self._ctrl = self._data.ctrl
-            self._snapshot = ModelSnapshot(physics.model.ptr) if snapshots_supported() else None
+            self._replace_physics(root, model)
         self._hooks.refresh_entity_hooks()
         self._run_after_compile_hooks()
         self._check_action = action_validator(self._task.action_spec(self._physics_proxy))
-        self._n_sub_steps = self._task_sub_steps()
-        self._observation_updater = self._make_observation_updater()
+        observables = self._task.observables
+        collected = _collected(observables)
+        if (
+            self._observation_updater is None
+            or self._task_sub_steps() != self._n_sub_steps
+            or not _same_collection(collected, self._collected_observables)
+        ):
+            self._rebuild_observation_updater(observables)
+        self._collected_observables = collected
 
-    def _restore_compiled_model(self) -> None:
-        """Puts the compiled model back as it was right after compiling.
-
-        Everything built from the compiled model (Physics, bindings, action checks,
-        observation updater) stays valid; the after_compile hooks run again, as they
-        would after a real recompile.
-        """
-        self._snapshot.restore()
-        self._run_after_compile_hooks()
-        n_sub_steps = self._task_sub_steps()
-        if n_sub_steps != self._n_sub_steps:
-            self._n_sub_steps = n_sub_steps
-            self._observation_updater = self._make_observation_updater()
+    def _replace_physics(self, root, model) -> None:
+        """Makes a new Physics for `model` the environment's, freeing the old one."""
+        physics = mjcf.Physics.from_compiled_mjcf_model(root, model)
+        if self._physics is not None:
+            self._physics.free()
+        physics.legacy_step = self._legacy_step
+        self._physics = physics
+        self._physics_proxy = weakref.proxy(physics)
+        self._data = physics.data.ptr
+        self._ctrl = self._data.ctrl
+        self._snapshot = ModelSnapshot(physics.model.ptr) if snapshots_supported() else None
+        self._observation_updater = None
 
     def _run_after_compile_hooks(self) -> None:
         # The hooks may set state, so they run inside a reset context; a divergence
@@ -283,17 +328,14 @@ class Environment(dm_env.Environment):
             return self._overridden_n_sub_steps
         return self._task.physics_steps_per_control_step
 
-    def _make_observation_updater(self) -> observation.Updater:
-        return observation.Updater(
-            self._task.observables,
+    def _rebuild_observation_updater(self, observables) -> None:
+        self._n_sub_steps = self._task_sub_steps()
+        self._observation_updater = observation.Updater(
+            observables,
             self._n_sub_steps,
             self._strip_singleton_obs_buffer_dim,
             self._pad_with_initial_value,
         )
-
-    def _model_changed_since_compile(self) -> bool:
-        root = self._task.root_entity.mjcf_model
-        return root.modification_count != self._compiled_modification_count
 
     # Resetting.
 
@@ -325,10 +367,7 @@ class Environment(dm_env.Environment):
         self._hooks.refresh_entity_hooks()
         if self._recompile_mjcf_every_episode or not self._episode_mjcf_prepared:
             self._hooks.initialize_episode_mjcf(self._random_state)
-            if self._snapshot is None or self._model_changed_since_compile():
-                self._compile()
-            else:
-                self._restore_compiled_model()
+            self._update_model()
             self._episode_mjcf_prepared = True
         with self._physics.reset_context():
             self._hooks.initialize_episode(self._physics_proxy, self._random_state)
@@ -412,19 +451,19 @@ class Environment(dm_env.Environment):
 
     def _substeps_with_hooks(self, action) -> int:
         """Steps the physics one sub-step at a time, calling the sub-step hooks around each."""
-        hooks = self._hooks
-        physics = self._physics_proxy
-        random_state = self._random_state
+        before, after = self._hooks.substep_calls(self._physics_proxy, action, self._random_state)
         updater = self._observation_updater
-        sample_steps = updater.sample_steps
+        sample_steps = frozenset(updater.sample_steps)
         n_sub_steps = self._n_sub_steps
         step = self._physics.step
         done = 0
         for sub_step in range(1, n_sub_steps + 1):
-            hooks.before_substep(physics, action, random_state)
+            for call in before:
+                call()
             step()
-            hooks.after_substep(physics, random_state)
-            if sub_step < n_sub_steps and sub_step in sample_steps:
+            for call in after:
+                call()
+            if sub_step in sample_steps and sub_step < n_sub_steps:
                 updater.update(sub_step - done)
                 done = sub_step
         return n_sub_steps - done

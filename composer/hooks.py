@@ -1,5 +1,6 @@
 """Finds the lifecycle hooks a task and its entities implement, and calls only those."""
 
+import functools
 from collections.abc import Callable
 
 from composer.entity import Entity
@@ -152,12 +153,23 @@ class EnvironmentHooks:
     def before_step(self, physics, action, random_state) -> None:
         self._call_with_action("before_step", physics, action, random_state)
 
-    def before_substep(self, physics, action, random_state) -> None:
-        self._call_with_action("before_substep", physics, action, random_state)
+    def substep_calls(self, physics, action, random_state) -> tuple[tuple, tuple]:
+        """The `before_substep` and `after_substep` hooks with their arguments bound.
 
-    def after_substep(self, physics, random_state) -> None:
-        for hook in self._chains["after_substep"].all:
-            hook(physics, random_state)
+        Returns (before, after): zero-argument callables, in call order, so that a control
+        step binds the arguments once instead of at every sub-step.
+        """
+        chain = self._chains["before_substep"]
+        before = (
+            *(functools.partial(hook, physics, action, random_state) for hook in chain.task),
+            *(functools.partial(hook, physics, random_state) for hook in chain.entities),
+            *(functools.partial(hook, physics, action, random_state) for hook in chain.extra),
+        )
+        after = tuple(
+            functools.partial(hook, physics, random_state)
+            for hook in self._chains["after_substep"].all
+        )
+        return before, after
 
     def after_step(self, physics, random_state) -> None:
         for hook in self._chains["after_step"].all:

@@ -171,7 +171,8 @@ class ModelSnapshot:
 
     `load(other)` does the same with the parameters of another compiled model of the
     same structure, so a recompile that only changed parameters (colours, sizes,
-    masses, ...) can reuse everything built on this model.
+    masses, ...) can reuse everything built on this model. `composer.Environment` decides
+    when a reset restores, loads or compiles afresh in one place: `_update_model`.
 
     Raises (on construction):
       RuntimeError: if `snapshots_supported()` is False.

@@ -8,7 +8,9 @@ manipulation for an id written `manipulation:composer/<name>-v0`.
 
 `gymnasium.make(id, **kwargs)` builds `make_env(name, **kwargs)`;
 `gymnasium.make_vec(id, num_envs=n, vectorization_mode='vector_entry_point', **kwargs)`
-builds `make_vector_env(name, n, **kwargs)`, a `composer.gym.ThreadedVectorEnv`.
+builds `make_vector_env(name, n, **kwargs)`: a `composer.gym.ThreadedVectorEnv`, or with
+`backend='ray'` a `composer.gym.RayVectorEnv`. (Gymnasium 1.x refuses `vector_kwargs` in
+this mode; the vector env's options go in `kwargs` with the sub-environments' ones.)
 """
 
 import functools
@@ -20,7 +22,7 @@ from gymnasium.vector import AutoresetMode
 import manipulation
 
 if TYPE_CHECKING:
-    from composer.gym import GymnasiumEnv, ThreadedVectorEnv
+    from composer.gym import GymnasiumEnv, RayVectorEnv, ThreadedVectorEnv
 
 __all__ = ["NAMESPACE", "env_id", "make_env", "make_vector_env", "register_all"]
 
@@ -51,23 +53,58 @@ def make_vector_env(
     environment_name: str,
     num_envs: int,
     *,
+    backend: str = "threads",
     num_threads: int | None = None,
+    address: str | None = None,
+    envs_per_actor: int | None = None,
+    num_cpus_per_actor: float | None = None,
+    max_restarts: int | None = None,
     autoreset_mode: AutoresetMode | str = AutoresetMode.NEXT_STEP,
     copy: bool = True,
     **kwargs,
-) -> "ThreadedVectorEnv":
-    """Returns a `ThreadedVectorEnv` of `num_envs` copies of `make_env(environment_name)`.
+) -> "ThreadedVectorEnv | RayVectorEnv":
+    """Returns a vector env of `num_envs` copies of `make_env(environment_name)`.
 
     Args:
-      num_threads, autoreset_mode, copy: passed to `ThreadedVectorEnv`.
+      backend: "threads" for a `ThreadedVectorEnv` (takes `num_threads`), "ray" for a
+        `RayVectorEnv` (takes `address`, `envs_per_actor`, `num_cpus_per_actor`,
+        `max_restarts`, defaults as there; needs the extra `[ray]`).
+      autoreset_mode, copy: passed to either.
       **kwargs: passed to each sub-environment's `GymnasiumEnv`.
+
+    Raises:
+      ValueError: for an unknown backend, or an option the backend does not take.
     """
-    from composer.gym import ThreadedVectorEnv
+    from composer.gym import RayVectorEnv, ThreadedVectorEnv
 
     env_fn = functools.partial(make_env, environment_name, **kwargs)
-    return ThreadedVectorEnv(
-        [env_fn] * num_envs, num_threads, autoreset_mode=autoreset_mode, copy=copy
-    )
+    ray_options = {
+        "address": address,
+        "envs_per_actor": envs_per_actor,
+        "num_cpus_per_actor": num_cpus_per_actor,
+        "max_restarts": max_restarts,
+    }
+    if backend == "threads":
+        given = [name for name, value in ray_options.items() if value is not None]
+        if given:
+            raise ValueError(f"{given[0]}: an option of backend='ray', but backend is 'threads'")
+        return ThreadedVectorEnv(
+            [env_fn] * num_envs, num_threads, autoreset_mode=autoreset_mode, copy=copy
+        )
+    if backend == "ray":
+        if num_threads is not None:
+            raise ValueError(
+                "num_threads: an option of backend='threads', but backend is 'ray' (use "
+                "envs_per_actor and num_cpus_per_actor)"
+            )
+        given = {name: value for name, value in ray_options.items() if value is not None}
+        return RayVectorEnv(
+            [env_fn] * num_envs,
+            **given,
+            autoreset_mode=autoreset_mode,
+            copy=copy,
+        )
+    raise ValueError(f"backend: expected 'threads' or 'ray', got {backend!r}")
 
 
 def register_all() -> None:

@@ -1,76 +1,21 @@
-"""Attaching one model to another: attachment frames and the checks that guard them."""
+"""Attaching one model to another (`attach`), and the global options attached models share.
+
+The attachment frame itself is `mjcf.element.AttachmentFrame`, re-exported here.
+"""
 
 from __future__ import annotations
 
 import numpy as np
 
 from mjcf import constants
-from mjcf.element import Element, RootElement
+from mjcf.element import AttachmentFrame, Element, RootElement
 from mjcf.option_merging import MERGED_OPTIONS
 
+# `AttachmentFrame` lives in `mjcf.element`, which recognises frames by their type.
+__all__ = ["AttachmentFrame", "attach", "global_options"]
+
 _ATTACHABLE_TAGS = ("site", "body", "worldbody")
-_FRAME_CHILDREN = ("joint", "freejoint", "inertial")
-_HINGED = ("joint", "inertial")
 _SITE_POSE_ATTRIBUTES = ("pos", "quat", "axisangle", "xyaxes", "zaxis", "euler")
-
-
-class AttachmentFrame(Element):
-    """The body that carries an attached model, placed where the model was attached.
-
-    Its generated name is the attached model's scope prefix ('child/'); it accepts
-    `<joint>`, `<freejoint>` and `<inertial>` children (e.g. `frame.add('freejoint')` makes
-    the attached model free-floating) and pose attributes. Its contents in the generated
-    XML are the attached model's worldbody.
-    """
-
-    __slots__ = ("_attached",)
-    _holds_frame_children = True
-
-    @property
-    def attached_model(self) -> RootElement:
-        return self._attached
-
-    def _allowed_children(self) -> dict:
-        children = self._spec.children
-        # Only a model attached to the world can float freely.
-        allowed = _FRAME_CHILDREN if self._parent._spec.name == constants.WORLDBODY else _HINGED
-        return {tag: children[tag] for tag in allowed if tag in children}
-
-    def all_children(self) -> list[Element]:
-        """The frame's own children, then the elements of the attached model's worldbody."""
-        world = self._attached._singleton_if_present(constants.WORLDBODY)
-        attached = world.all_children() if world is not None else []
-        return list(self._children) + [c for c in attached if c._spec.repeated]
-
-    def _scoped_name(self, prefix: str) -> str:
-        return prefix + self._attached._namescope.name + constants.PREFIX_SEPARATOR
-
-    def unnamed_joint(self) -> Element | None:
-        """The first unnamed joint or freejoint of this frame, which is named after the frame
-        ('child/') in the compiled model, as dm_control names it."""
-        for child in self._children:
-            if child._spec.namespace == constants.JOINT and "name" not in child._attributes:
-                return child
-        return None
-
-    def _describe(self) -> str:
-        return f"<attachment frame of model {self._attached._namescope.name!r}>"
-
-    def _set_attribute(self, name: str, value) -> None:
-        if name in ("name", "childclass"):
-            raise AttributeError(
-                f"{self._describe()}: attribute {name!r} of an attachment frame is set by "
-                "the attached model and cannot be changed"
-            )
-        super()._set_attribute(name, value)
-
-    def _collect_children(self, namespace, exclude_attachments, found) -> None:
-        for child in self._children:
-            child._collect(namespace, exclude_attachments, found)
-        if not exclude_attachments:
-            world = self._attached._singleton_if_present(constants.WORLDBODY)
-            if world is not None:
-                world._collect_children(namespace, exclude_attachments, found)
 
 
 def attach(site_or_body: Element, model: RootElement) -> AttachmentFrame:

@@ -8,7 +8,9 @@ consecutive are served as NumPy views, other rows are gathered into a reused buf
 
 Writes through a binding to an MjModel field or a simulation input (qpos, qvel, ctrl, ...)
 mark the physics dirty; the next read of a derived quantity (xpos, sensordata, ...) through
-any binding first runs ``mj_forward``.
+any binding first runs ``mj_forward``. Writes to the model's appearance fields (colours,
+materials; ``mjcf.appearance.forward_neutral_fields``) do not, since ``mj_forward`` does not
+read them.
 """
 
 import difflib
@@ -327,7 +329,12 @@ class Binding:
                     sim.forward()
                 return view
 
-        if is_input:
+        if after_write is None and is_input:
+
+            def write(value):
+                array[index] = value
+
+        elif is_input:
 
             def write(value):
                 array[index] = value
@@ -364,7 +371,10 @@ class Binding:
         return field_layout.compress(layout.multi_index(rule, self._ids))
 
     def _after_write(self, ref: field_layout.FieldRef, name: str):
+        """What a write to input field ``ref`` must do next; None when nothing."""
         sim = self._sim
+        if ref.name in sim.forward_neutral:
+            return None
         cleared = []
         if ref.struct == MODEL and ref.addressing is None:
             for flag in _FRAME_FLAGS_CLEARED_ON_WRITE.get(name, ()):

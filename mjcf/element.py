@@ -103,7 +103,6 @@ class Element:
     )
 
     # Whether this element is an attachment frame, whose joints are named after it.
-    _holds_frame_children = False
 
     def __init__(self, *args, **kwargs):
         raise TypeError(
@@ -185,7 +184,7 @@ class Element:
         name = self._attributes.get("name")
         if name is not None:
             parent = self._parent
-            if parent is not None and parent._holds_frame_children:
+            if isinstance(parent, AttachmentFrame):
                 return parent._scoped_name(prefix) + name + _SEP
             return prefix + name
         return self._generated_name(prefix)
@@ -193,9 +192,9 @@ class Element:
     def _generated_name(self, prefix: str) -> str:
         """The name written for this unnamed element when its model's prefix is `prefix`."""
         if self._spec.namespace == constants.JOINT:
-            frame_joint = getattr(type(self._parent), "unnamed_joint", None)
-            if frame_joint is not None and frame_joint(self._parent) is self:
-                return prefix + self._parent._attached._namescope.name + _SEP
+            parent = self._parent
+            if isinstance(parent, AttachmentFrame) and parent.unnamed_joint() is self:
+                return prefix + parent._attached._namescope.name + _SEP
         return (prefix or _SEP) + self._unnamed_id()
 
     def _unnamed_id(self) -> str:
@@ -530,7 +529,7 @@ class Element:
         """
         namespace = registry_namespace(self._spec)
         parent = self._parent
-        if parent is not None and parent._holds_frame_children:
+        if isinstance(parent, AttachmentFrame):
             return f"{namespace}{constants.NAMESPACE_SEPARATOR}frame{id(parent)}"
         return namespace
 
@@ -626,10 +625,9 @@ class Element:
                 element._root._namescope.remove(*entry)
             if element._auto_id is not None:
                 element._root._namescope.remove_unnamed(element._spec.namespace, element._auto_id)
-            attached = getattr(element, "_attached", None)
-            if attached is not None:
+            if isinstance(element, AttachmentFrame):
                 element._root._frames.remove(element)
-                attached._frame = None
+                element._attached._frame = None
             element._removed = True
         self._root._namescope.naming_changed()
         if self._spec.holds_files:
@@ -683,8 +681,9 @@ class Element:
             return False
         if not self._same_attributes(other):
             return False
-        attached = getattr(self, "_attached", None)
-        if attached is not None and not attached.is_same_as(getattr(other, "_attached", None)):
+        if isinstance(self, AttachmentFrame) and not (
+            isinstance(other, AttachmentFrame) and self._attached.is_same_as(other._attached)
+        ):
             return False
         mine = [c for c in self._children if _is_set(c)]
         theirs = [c for c in other._children if _is_set(c)]
@@ -910,8 +909,70 @@ def _frame_of(element):
 
 def _matches(element: Element, namespace: str) -> bool:
     if namespace == constants.ATTACHMENT_FRAME:
-        return getattr(element, "_attached", None) is not None
+        return isinstance(element, AttachmentFrame)
     return registry_namespace(element._spec) == namespace
+
+
+_FRAME_CHILDREN = ("joint", "freejoint", "inertial")
+_HINGED = ("joint", "inertial")
+
+
+class AttachmentFrame(Element):
+    """The body that carries an attached model, placed where the model was attached.
+
+    Its generated name is the attached model's scope prefix ('child/'); it accepts
+    `<joint>`, `<freejoint>` and `<inertial>` children (e.g. `frame.add('freejoint')` makes
+    the attached model free-floating) and pose attributes. Its contents in the generated
+    XML are the attached model's worldbody.
+    """
+
+    __slots__ = ("_attached",)
+
+    @property
+    def attached_model(self) -> RootElement:
+        return self._attached
+
+    def _allowed_children(self) -> dict:
+        children = self._spec.children
+        # Only a model attached to the world can float freely.
+        allowed = _FRAME_CHILDREN if self._parent._spec.name == constants.WORLDBODY else _HINGED
+        return {tag: children[tag] for tag in allowed if tag in children}
+
+    def all_children(self) -> list[Element]:
+        """The frame's own children, then the elements of the attached model's worldbody."""
+        world = self._attached._singleton_if_present(constants.WORLDBODY)
+        attached = world.all_children() if world is not None else []
+        return list(self._children) + [c for c in attached if c._spec.repeated]
+
+    def _scoped_name(self, prefix: str) -> str:
+        return prefix + self._attached._namescope.name + constants.PREFIX_SEPARATOR
+
+    def unnamed_joint(self) -> Element | None:
+        """The first unnamed joint or freejoint of this frame, which is named after the frame
+        ('child/') in the compiled model, as dm_control names it."""
+        for child in self._children:
+            if child._spec.namespace == constants.JOINT and "name" not in child._attributes:
+                return child
+        return None
+
+    def _describe(self) -> str:
+        return f"<attachment frame of model {self._attached._namescope.name!r}>"
+
+    def _set_attribute(self, name: str, value) -> None:
+        if name in ("name", "childclass"):
+            raise AttributeError(
+                f"{self._describe()}: attribute {name!r} of an attachment frame is set by "
+                "the attached model and cannot be changed"
+            )
+        super()._set_attribute(name, value)
+
+    def _collect_children(self, namespace, exclude_attachments, found) -> None:
+        for child in self._children:
+            child._collect(namespace, exclude_attachments, found)
+        if not exclude_attachments:
+            world = self._attached._singleton_if_present(constants.WORLDBODY)
+            if world is not None:
+                world._collect_children(namespace, exclude_attachments, found)
 
 
 class RootElement(Element):

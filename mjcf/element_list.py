@@ -4,6 +4,7 @@ from __future__ import annotations
 
 from typing import TYPE_CHECKING
 
+from mjcf import element as element_module
 from mjcf.constants import DEFAULT, PREFIX_SEPARATOR, WORLDBODY
 
 # Top-level sections that list only their own model's elements: attached models' bodies hang
@@ -45,7 +46,7 @@ class ElementList:
         lists too: an attachment frame lists its model's worldbody children, a top-level
         section (`root.actuator`) the same section of each attached model."""
         parent = self._parent
-        if parent._holds_frame_children:
+        if isinstance(parent, element_module.AttachmentFrame):
             sources = [(parent._attached, WORLDBODY)]
         else:
             root = parent._root

@@ -11,6 +11,7 @@ from absl import logging
 
 from mjcf import binding as binding_module
 from mjcf import named_indexing
+from mjcf.appearance import forward_neutral_fields
 from mjcf.field_layout import ModelLayout
 from mjcf.rendering import Renderers
 from mjcf.struct_wrappers import DataWrapper, ModelWrapper, flags_set
@@ -56,7 +57,15 @@ class _Simulation:
     reference to the Physics (no reference cycle keeps a discarded simulation alive).
     """
 
-    __slots__ = ("model", "data", "opt", "warnings", "dirty", "raise_on_warnings")
+    __slots__ = (
+        "model",
+        "data",
+        "opt",
+        "warnings",
+        "dirty",
+        "raise_on_warnings",
+        "forward_neutral",
+    )
 
     def __init__(self, model: mujoco.MjModel, data: mujoco.MjData):
         self.model = model
@@ -65,6 +74,8 @@ class _Simulation:
         self.warnings = data.warning.number
         self.dirty = False
         self.raise_on_warnings = True
+        # MjModel fields whose writes leave derived quantities valid (see mjcf.appearance).
+        self.forward_neutral = forward_neutral_fields(model)
 
     def forward(self) -> None:
         before = self.warnings.tobytes()

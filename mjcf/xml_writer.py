@@ -9,6 +9,22 @@ opening tag, valid while the written model's naming stamp (see `NameScope`), the
 scope prefix and its inherited default class stay the same. The whole text is kept, valid
 while the model's modification count also stays the same.
 
+Caches, and what invalidates them (the one place these rules are written down):
+
+- `Element._xml_cache` (see `_HEAD_*` below): the element's plain attribute text for one
+  precision setting, plus (from whole-model writes after a model's first) its opening tag.
+  The plain text is valid while the precision setting is the same; the opening tag while
+  the writer's stamp (format options, model and its naming stamp), the element's scope
+  prefix and the class it inherits are too. `Element` clears it whenever an attribute of
+  the element changes (so does the parser for the elements it fills in).
+- `Element._text_cache` (`_TEXT_*`): the whole text of an element with children (or of
+  a part of the document owned by an element, see `_Writer.kept`). Valid under the same text
+  stamp (the stamp and pretty-printing options), scope prefix, inherited class and depth;
+  `Element._changed` clears it on the changed element and every element enclosing it.
+- `RootElement._xml_string_cache` (`_MODEL_*`): the whole model's text, valid while its key
+  (modification count, naming stamp, scope prefix and format options)
+  is the same.
+
 A whole model is written so that every compiled object is addressable: unnamed elements that
 compile to a named object get a generated name, and every element that accepts a default
 class names its class explicitly. Each model's global defaults live in a class named after
@@ -52,12 +68,25 @@ _FRAMES_NEEDED = 4000
 # hang below attachment frames), defaults (scoped per model) and the global settings.
 _NOT_SHARED = (constants.WORLDBODY, constants.DEFAULT, *_TOP_ONLY_SECTIONS)
 _NOT_SHARED += constants.GLOBAL_OPTION_SECTIONS
-# Element._xml_cache is (precision key, plain attribute text, stamp, scope prefix, inherited
-# class, opening tag, class the children inherit); the last five are None when only the plain
-# text is cached. Setting it bypasses Element.__setattr__, which handles XML attributes.
+
+
+# The caches are plain tuples, read through these field positions: they are built once per
+# element write, where a NamedTuple's constructor would make a rebuild of a model's text
+# about a tenth slower.
+#
+# `Element._xml_cache`: (precision key, plain attribute text, stamp, scope prefix, inherited
+# class, opening tag, class the children inherit); the last five are None when only the
+# plain attribute text is kept.
+_HEAD_PRECISION, _HEAD_STATIC, _HEAD_STAMP, _HEAD_PREFIX, _HEAD_INHERITED = range(5)
+_HEAD_TAG, _HEAD_DCLASS = 5, 6
+# `Element._text_cache`: (text stamp, scope prefix, inherited class, depth, text); a text of
+# None means the part was seen once but not kept.
+_TEXT_STAMP, _TEXT_PREFIX, _TEXT_INHERITED, _TEXT_DEPTH, _TEXT = range(5)
+# `RootElement._xml_string_cache`: (key, text).
+_MODEL_KEY, _MODEL_TEXT = 0, 1
+
+# Setting the element caches bypasses Element.__setattr__, which handles XML attributes.
 _set_xml_cache = Element.__dict__["_xml_cache"].__set__
-# Element._text_cache is (text stamp, scope prefix, inherited class, depth, text of the element
-# with its children); Element._changed clears it on the element and all that enclose it.
 _set_text_cache = Element.__dict__["_text_cache"].__set__
 
 
@@ -149,8 +178,8 @@ class _Writer:
         Identifiers, references and files are left out; they are scoped at write time.
         """
         cache = element._xml_cache
-        if cache is not None and cache[0] == self.key:
-            return cache[1]
+        if cache is not None and cache[_HEAD_PRECISION] == self.key:
+            return cache[_HEAD_STATIC]
         if self.full_precision:
             # `_texts` holds the full-precision text of exactly the plain attributes, in the
             # order of `_attributes` (Element keeps both in step).
@@ -241,23 +270,25 @@ class _Writer:
             text = element._text_cache
             if (
                 text is not None
-                and text[0] == self.text_stamp
-                and text[1] == prefix
-                and text[2] == dclass
-                and text[3] == depth
+                and text[_TEXT_STAMP] == self.text_stamp
+                and text[_TEXT_PREFIX] == prefix
+                and text[_TEXT_INHERITED] == dclass
+                and text[_TEXT_DEPTH] == depth
             ):
-                self.out.append(text[4])
+                self.out.append(text[_TEXT])
                 return
             cache = element._xml_cache
             if (
                 cache is not None
-                and cache[2] == stamp
-                and cache[3] == prefix
-                and cache[4] == dclass
+                and cache[_HEAD_STAMP] == stamp
+                and cache[_HEAD_PREFIX] == prefix
+                and cache[_HEAD_INHERITED] == dclass
             ):
                 # Written before under the same names: likely to be written again, so its
                 # whole text is kept (not on a first write, which would pay for joining it).
-                self.tree(element, cache[5], depth, prefix, cache[6], True, dclass)
+                self.tree(
+                    element, cache[_HEAD_TAG], depth, prefix, cache[_HEAD_DCLASS], True, dclass
+                )
                 return
         self.fresh_element(element, depth, prefix, dclass)
 
@@ -276,8 +307,8 @@ class _Writer:
         attributes = element._attributes
         plain = element._texts
         cache = element._xml_cache
-        if cache is not None and cache[0] == self.key:
-            static = cache[1]
+        if cache is not None and cache[_HEAD_PRECISION] == self.key:
+            static = cache[_HEAD_STATIC]
         elif self.full_precision:
             static = "".join(plain.values())
         else:
@@ -416,14 +447,15 @@ class _Writer:
         cache = owner._text_cache
         seen = (
             cache is not None
-            and cache[0] == stamp
-            and cache[1] == prefix
-            and cache[2] == dclass
-            and cache[3] == depth
+            and cache[_TEXT_STAMP] == stamp
+            and cache[_TEXT_PREFIX] == prefix
+            and cache[_TEXT_INHERITED] == dclass
+            and cache[_TEXT_DEPTH] == depth
         )
-        if seen and cache[4] is not None:
-            if cache[4]:
-                out.append(cache[4])
+        kept_text = cache[_TEXT] if seen else None
+        if kept_text is not None:
+            if kept_text:
+                out.append(kept_text)
                 # Files in the reused text were not met: leave the assets to get_assets.
                 self.assets = None
             return
@@ -690,8 +722,8 @@ def _element_to_string(
             zero_threshold,
         )
         cache = element._xml_string_cache
-        if cache is not None and cache[0] == key:
-            return cache[1]
+        if cache is not None and cache[_MODEL_KEY] == key:
+            return cache[_MODEL_TEXT]
         writer = _Writer(prefix_root, self_close, pretty_print, precision, zero_threshold, True)
         writer.model(element)
         text = "".join(writer.out)

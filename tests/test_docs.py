@@ -62,13 +62,13 @@ def test_an_unknown_python_fence_is_an_error():
 
 
 def test_docs_have_pages_with_python_blocks():
-    pages_with_code = [page for page in _pages() if python_blocks(page.read_text())]
+    pages_with_code = [page for page in _pages() if python_blocks(page.read_text(encoding="utf-8"))]
     assert len(pages_with_code) >= 10
 
 
 @pytest.mark.parametrize("page", _pages(), ids=lambda page: str(page.relative_to(DOCS)))
 def test_page_code_runs(page, tmp_path, monkeypatch):
-    blocks = python_blocks(page.read_text())
+    blocks = python_blocks(page.read_text(encoding="utf-8"))
     if not any(block.mode != "skip" for block in blocks):
         pytest.skip("no runnable python blocks")
     monkeypatch.chdir(tmp_path)
@@ -92,7 +92,7 @@ _WIDEST_CODE_LINE = 80
 @pytest.mark.parametrize("page", _pages(), ids=lambda page: str(page.relative_to(DOCS)))
 def test_code_lines_fit_the_page_without_scrolling(page):
     # At a 1280-pixel window the theme shows about 82 characters of a code block.
-    text = page.read_text()
+    text = page.read_text(encoding="utf-8")
     too_wide = [
         f"line {text.count(chr(10), 0, match.start('code')) + 1 + i}: {line}"
         for match in _FENCE.finditer(text)

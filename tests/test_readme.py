@@ -11,7 +11,7 @@ README = pathlib.Path(__file__).resolve().parents[1] / "README.md"
 
 
 def _section_code(title: str) -> str:
-    text = README.read_text()
+    text = README.read_text(encoding="utf-8")
     match = re.search(rf"## {re.escape(title)}\n[^#]*?```python\n(.*?)```", text, re.S)
     assert match, f"README has no python block under '## {title}'"
     return match.group(1)

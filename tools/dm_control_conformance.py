@@ -159,7 +159,7 @@ def build_venv() -> Path:
     python = venv / "bin" / "python"
     stamp = venv / "conformance-stamp"
     wanted = f"dm-control=={DM_CONTROL_VERSION} " + " ".join(TEST_EXTRAS)
-    if stamp.exists() and stamp.read_text() == wanted:
+    if stamp.exists() and stamp.read_text(encoding="utf-8") == wanted:
         # Refresh the project itself: it is installed from the working tree every run.
         _run([str(python), "-m", "pip", "install", "-q", "--no-deps", "-e", str(REPO)])
         return python

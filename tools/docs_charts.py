@@ -127,13 +127,15 @@ def write_charts(results: dict, out: pathlib.Path) -> list[pathlib.Path]:
     paths = []
     for benchmark in results["benchmarks"]:
         path = out / f"perf_{benchmark['name']}.svg"
-        path.write_text(ratio_chart_svg(benchmark))
+        path.write_text(ratio_chart_svg(benchmark), encoding="utf-8")
         paths.append(path)
     return paths
 
 
 def main() -> None:
-    for path in write_charts(json.loads(RESULTS.read_text()), pathlib.Path(sys.argv[1])):
+    for path in write_charts(
+        json.loads(RESULTS.read_text(encoding="utf-8")), pathlib.Path(sys.argv[1])
+    ):
         print(path)
 
 

@@ -53,11 +53,11 @@ def on_pre_build(config, **kwargs) -> None:
     out.mkdir(parents=True, exist_ok=True)
     _run_tool("docs_gallery.py", out)
     _run_tool("docs_figures.py", out)
-    docs_charts.write_charts(json.loads(docs_charts.RESULTS.read_text()), out)
+    docs_charts.write_charts(json.loads(docs_charts.RESULTS.read_text(encoding="utf-8")), out)
 
 
 def on_page_markdown(markdown: str, page, config, files, **kwargs) -> str:
     if _MARKER not in markdown:
         return markdown
-    results = json.loads(docs_charts.RESULTS.read_text())
+    results = json.loads(docs_charts.RESULTS.read_text(encoding="utf-8"))
     return markdown.replace(_MARKER, docs_charts.performance_markdown(results))

@@ -67,7 +67,9 @@ def _minor(version: str) -> str:
 
 def minimum_version() -> str:
     """The project's MuJoCo floor, read from the module that enforces it at import."""
-    match = re.search(r'^MINIMUM_VERSION = "([\d.]+)"', _COMPAT_MODULE.read_text(), re.M)
+    match = re.search(
+        r'^MINIMUM_VERSION = "([\d.]+)"', _COMPAT_MODULE.read_text(encoding="utf-8"), re.M
+    )
     if match is None:
         raise RuntimeError(f'no MINIMUM_VERSION = "x.y.z" line in {_COMPAT_MODULE}')
     return match.group(1)
@@ -193,7 +195,7 @@ def run_release(release: Release, venvs: Path, pytest_args: list[str]) -> Outcom
     with open(log_path, "w") as log:
         problem = _install(venv, release, log)
     if problem:
-        tail = tuple(log_path.read_text().splitlines()[-_TAIL_LINES:])
+        tail = tuple(log_path.read_text(encoding="utf-8").splitlines()[-_TAIL_LINES:])
         return Outcome(release.version, 0, 0, 0, time.monotonic() - start, problem, tail)
     if release.below_floor:
         return _check_import_refused(release, venv, log_path, start)

@@ -30,7 +30,7 @@ def ensure_venv(path: Path, requirements: list[str], *, project: bool = True) ->
     python = path / "bin" / "python"
     stamp = path / "scratch-venv-requirements"
     wanted = "\n".join([*requirements, f"project={project}"])
-    if not (stamp.exists() and stamp.read_text() == wanted):
+    if not (stamp.exists() and stamp.read_text(encoding="utf-8") == wanted):
         shutil.rmtree(path, ignore_errors=True)
         subprocess.run([sys.executable, "-m", "venv", str(path)], check=True)
         _pip(python, "--upgrade", "pip")

@@ -33,6 +33,7 @@ __all__ = [
     "SubEnvOutcome",
     "SubEnvironmentError",
     "call_sub_env",
+    "read_row",
     "reset_sub_env",
     "step_sub_env",
 ]
@@ -111,6 +112,15 @@ def _copy_batch(batch):
     if isinstance(batch, tuple):
         return tuple(_copy_batch(part) for part in batch)
     return batch.copy()
+
+
+def read_row(batch, index: int):
+    """A copy of row `index` of a batched observation (array, or dict/tuple of them)."""
+    if isinstance(batch, dict):
+        return type(batch)((key, read_row(part, index)) for key, part in batch.items())
+    if isinstance(batch, tuple):
+        return tuple(read_row(part, index) for part in batch)
+    return batch[index].copy()
 
 
 def _write_row(batch, index: int, value) -> None:

@@ -179,8 +179,9 @@ class GymnasiumEnv(gymnasium.Env):
         layout = self._layout
         if layout is None:
             return observation
-        if not layout.images:
+        if layout.names and not layout.images:
             return np.concatenate([observation[name].ravel() for name in layout.names])
+        # Images, or nothing at all: a dict, as `spaces.flat_space` describes it.
         flat = {}
         if layout.names:
             flat["features"] = np.concatenate([observation[name].ravel() for name in layout.names])

@@ -5,6 +5,7 @@ import inspect
 import math
 import operator
 from collections.abc import Callable
+from typing import NamedTuple
 
 import numpy as np
 from absl import logging
@@ -21,6 +22,38 @@ _NEVER = math.inf
 # Plans are cached per phase of the schedule; this bounds the cache when intervals have a
 # very large least common multiple.
 _MAX_CACHED_PLANS = 4096
+
+
+class _DueEntry(NamedTuple):
+    """How `Updater.update` takes one sample of an observable: `insert(time, delay,
+    sample())`; `name` is the observable's, for error messages."""
+
+    insert: Callable
+    sample: Callable
+    delay: int
+    name: str
+
+
+class _SubStepPlan(NamedTuple):
+    """What `Updater.update` does at one sub-step where observables are due.
+
+    `fills` write samples straight into buffers (gathers and writers); `entries` sample the
+    other due observables. `all_entries` holds every due observable's entry, in observable
+    order: it replaces both while the physics is dirty, since direct sampling reads memory
+    that only a `forward()` brings up to date.
+    """
+
+    fills: tuple[Callable, ...]
+    entries: tuple[_DueEntry, ...]
+    all_entries: tuple[_DueEntry, ...]
+
+
+class _ControlStepPlan(NamedTuple):
+    """The samples of one control step: the sub-steps (offsets from its start) after which
+    observables are due, in increasing order, and each one's `_SubStepPlan`."""
+
+    sample_steps: tuple[int, ...]
+    sub_steps: tuple[_SubStepPlan, ...]
 
 
 def _accepts_random_state(function: Callable) -> bool:
@@ -153,9 +186,9 @@ class _EnabledObservable:
         buffer = self.buffer
         return observable, interval, observable.corruptor is None, buffer.shape, buffer.dtype
 
-    def due_entry(self, delay) -> tuple:
-        """What `Updater.update` needs to take one sample: (insert, sample, delay, name)."""
-        return self.buffer.insert, self.observation_callable, delay, self.name
+    def due_entry(self, delay) -> _DueEntry:
+        """What `Updater.update` needs to take one sample with `delay`."""
+        return _DueEntry(self.buffer.insert, self.observation_callable, delay, self.name)
 
     def plan(self, start: int, steps: int):
         """Returns ((offset, delay), ...) of the samples due in sub-steps start+1..start+steps
@@ -520,15 +553,12 @@ class Updater:
         else:
             plan = self._build_plan(start)
         self._plan_start = start
-        self._sample_steps, self._due = plan
+        self._sample_steps, self._due = plan.sample_steps, plan.sub_steps
         self._due_index = 0
         self._next_due = self._sample_steps[0] if self._sample_steps else _NEVER
 
-    def _build_plan(self, start):
-        """Returns (sample steps, per sample step (fills, entries, all entries)): zero-argument
-        functions writing samples straight into buffers (gathers and writers), the due
-        entries of the other observables, and every due observable's entry in observable
-        order, which `update` samples one by one while the physics is dirty."""
+    def _build_plan(self, start) -> _ControlStepPlan:
+        """Plans the control step starting `start` sub-steps into the episode."""
         due = {}
         for enabled in self._enabled_list:
             for offset, delay in enabled.plan(start, self._steps):
@@ -544,8 +574,9 @@ class Updater:
                 for enabled, entry in due[offset]
                 if not enabled.is_gathered and enabled.writer is None
             )
-            plan.append((tuple(fills), entries, tuple(entry for _, entry in due[offset])))
-        return sample_steps, tuple(plan)
+            all_entries = tuple(entry for _, entry in due[offset])
+            plan.append(_SubStepPlan(tuple(fills), entries, all_entries))
+        return _ControlStepPlan(sample_steps, tuple(plan))
 
     def update(self, num_steps: int = 1) -> None:
         """Records that `num_steps` physics steps have passed and samples what is now due."""

@@ -83,11 +83,20 @@ class Distribution(base.Variation):
         """Returns the NumPy sampling function of `random_state` for this distribution."""
 
     def __call__(self, initial_value=None, current_value=None, random_state=None):
-        args = base.evaluate(self._args, initial_value, current_value, random_state)
-        kwargs = base.evaluate(self._kwargs, initial_value, current_value, random_state)
         if self._has_variable_parameters:
+            args = base.evaluate(self._args, initial_value, current_value, random_state)
+            kwargs = base.evaluate(self._kwargs, initial_value, current_value, random_state)
             self._validate(*args, **kwargs)
-        target_shape = None if initial_value is None else np.shape(initial_value)
+        else:
+            # Constant parameters evaluate to themselves: skip the traversal (this runs
+            # once per sample when the distribution corrupts an observable).
+            args, kwargs = self._args, self._kwargs
+        if initial_value is None:
+            target_shape = None
+        elif type(initial_value) is np.ndarray:
+            target_shape = initial_value.shape
+        else:
+            target_shape = np.shape(initial_value)
         size = None if self._single_sample else target_shape
         sampler = self._callable(_random_state(random_state))
         try:

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import functools
+
 from composer.variation import base
 
 
@@ -9,6 +11,12 @@ class _Noise(base.Variation):
     def __init__(self, variation, cumulative: bool = False):
         self._variation = variation
         self._cumulative = cumulative
+        # A noise often corrupts an observable, once per sample: decide the call once.
+        self._draw = (
+            variation.__call__
+            if isinstance(variation, base.Variation)
+            else functools.partial(base.evaluate, variation)
+        )
 
     def _base_value(self, initial_value, current_value):
         value = current_value if self._cumulative else initial_value
@@ -28,7 +36,7 @@ class Additive(_Noise):
 
     def __call__(self, initial_value=None, current_value=None, random_state=None):
         value = self._base_value(initial_value, current_value)
-        return value + base.evaluate(self._variation, initial_value, current_value, random_state)
+        return value + self._draw(initial_value, current_value, random_state)
 
 
 class Multiplicative(_Noise):
@@ -36,4 +44,4 @@ class Multiplicative(_Noise):
 
     def __call__(self, initial_value=None, current_value=None, random_state=None):
         value = self._base_value(initial_value, current_value)
-        return value * base.evaluate(self._variation, initial_value, current_value, random_state)
+        return value * self._draw(initial_value, current_value, random_state)

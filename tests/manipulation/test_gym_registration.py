@@ -67,6 +67,37 @@ def test_make_vec_passes_thread_count_and_autoreset_mode():
     envs.close()
 
 
+def test_make_vec_rejects_an_unknown_backend():
+    with pytest.raises(ValueError, match="backend: expected 'threads' or 'ray', got 'mpi'"):
+        gymnasium.make_vec(
+            "composer/reach_site_features-v0",
+            num_envs=2,
+            vectorization_mode="vector_entry_point",
+            backend="mpi",
+        )
+
+
+def test_make_vec_rejects_ray_options_for_the_threads_backend():
+    with pytest.raises(ValueError, match="envs_per_actor: an option of backend='ray'"):
+        gymnasium.make_vec(
+            "composer/reach_site_features-v0",
+            num_envs=2,
+            vectorization_mode="vector_entry_point",
+            envs_per_actor=2,
+        )
+
+
+def test_make_vec_rejects_num_threads_for_the_ray_backend():
+    with pytest.raises(ValueError, match="num_threads: an option of backend='threads'"):
+        gymnasium.make_vec(
+            "composer/reach_site_features-v0",
+            num_envs=2,
+            vectorization_mode="vector_entry_point",
+            backend="ray",
+            num_threads=2,
+        )
+
+
 def test_importing_the_packages_does_not_import_gymnasium():
     assert (
         _run(

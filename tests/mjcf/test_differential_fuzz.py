@@ -10,7 +10,7 @@ runs as many as asked.
 import random
 
 import pytest
-from hypothesis import HealthCheck, given, settings
+from hypothesis import HealthCheck, assume, given, settings
 from hypothesis import strategies as st
 from mjcf_differential import MUTATION_KINDS, SEEDS, Verdict, Workspace, document_for, mutate
 
@@ -42,6 +42,9 @@ def test_each_seed_model_compiles_to_the_same_model_as_mujoco(workspace, seed):
 def test_mutated_documents_get_the_same_decision_and_model_as_mujoco(workspace, kind, rng):
     document = document_for(kind, rng)
     result = workspace.run(document)
+    # A document that crashes MuJoCo's own parser (mujoco 3.3.0 raises FatalError on some
+    # <layer> mutations) has no MuJoCo decision to agree with; tools/fuzz.py counts them.
+    assume(result.verdict != Verdict.MUJOCO_CRASH)
     assert result.verdict in _ACCEPTED, (
         f"{result.verdict.value} [{document.note}]: {result.detail}\n{document.text}"
     )

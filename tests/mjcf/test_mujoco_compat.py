@@ -43,7 +43,9 @@ def test_importing_the_project_on_an_old_mujoco_raises_one_clear_import_error(pa
 
 
 def test_pyproject_requires_the_floor_that_the_import_check_enforces():
-    requirements = re.findall(r'"mujoco>=([\d.]+)"', (_REPO / "pyproject.toml").read_text())
+    requirements = re.findall(
+        r'"mujoco>=([\d.]+)"', (_REPO / "pyproject.toml").read_text(encoding="utf-8")
+    )
     assert requirements == ["3.3.0"]
     assert mujoco_compat.MINIMUM_VERSION == "3.3.0"
 

@@ -237,6 +237,16 @@ def test_longest_allowed_array_is_accepted_by_mujoco(tags, name, length):
     without = _mujoco_error(root.to_xml_string())
     setattr(element, name, _LONGEST_VALUES.get(name, [1] * length))
     xml = root.to_xml_string()
+    # Some releases require other arrays with this one (mujoco 3.3's camera `focal` needs
+    # `sensorsize`, which needs `resolution`): give them too, as a user would.
+    for _ in element.spec.attributes:
+        error = _mujoco_error(xml)
+        companion = re.match(r"XML Error: required attribute missing: '(\w+)'", error or "")
+        if error == without or not companion or companion.group(1) not in element.spec.attributes:
+            break
+        companion_type = element.spec.attributes[companion.group(1)].type
+        setattr(element, companion.group(1), [1] * companion_type.lengths[1])
+        xml = root.to_xml_string()
     assert _mujoco_error(xml) == without, xml
 
 

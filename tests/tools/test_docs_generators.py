@@ -204,7 +204,7 @@ def test_observation_updater_and_manipulation_tables_are_parsed():
 
 
 def test_committed_benchmark_results_cover_every_benchmark_and_name_the_machine():
-    results = json.loads(docs_charts.RESULTS.read_text())
+    results = json.loads(docs_charts.RESULTS.read_text(encoding="utf-8"))
     assert [b["name"] for b in results["benchmarks"]] == [
         b.name for b in benchmark_results.BENCHMARKS
     ]
@@ -214,5 +214,5 @@ def test_committed_benchmark_results_cover_every_benchmark_and_name_the_machine(
 
 @pytest.mark.parametrize("script", sorted((ROOT / "tools").glob("*.py")), ids=lambda p: p.name)
 def test_every_tool_says_what_it_does_in_its_first_docstring_line(script):
-    first_line = script.read_text().splitlines()[0]
+    first_line = script.read_text(encoding="utf-8").splitlines()[0]
     assert first_line.startswith('"""') and len(first_line) > 20

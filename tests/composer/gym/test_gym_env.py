@@ -6,9 +6,10 @@ import dm_env
 import gymnasium
 import numpy as np
 import pytest
-from gym_scene import slider_environment
+from gym_scene import SliderTask, slider_environment
 from gymnasium.utils.env_checker import check_env
 
+import composer
 import manipulation
 from composer.gym import GymnasiumEnv
 
@@ -185,3 +186,16 @@ def test_rendering_env_passes_gymnasiums_env_checker_with_its_render_check():
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", UserWarning)
         check_env(env.unwrapped)
+
+
+def test_flattening_a_task_without_observations_gives_empty_dict_observations():
+    class Unobserved(SliderTask):
+        @property
+        def task_observables(self):
+            return {}
+
+    env = GymnasiumEnv(composer.Environment(Unobserved()), flatten_observations=True)
+    observation, _ = env.reset(seed=0)
+    assert observation == {}
+    assert env.observation_space == gymnasium.spaces.Dict({})
+    assert env.step(np.zeros(env.action_space.shape))[0] == {}
