@@ -14,7 +14,7 @@ from hypothesis import HealthCheck, assume, given, settings
 from hypothesis import strategies as st
 from mjcf_differential import MUTATION_KINDS, SEEDS, Verdict, Workspace, document_for, mutate
 
-EXAMPLES = 600
+EXAMPLES = 1500
 _ACCEPTED = (Verdict.AGREE, Verdict.DOCUMENTED)
 
 
