@@ -5,6 +5,7 @@ import dm_env
 import numpy as np
 import pytest
 from composer_scene import ReachTask
+from dm_env import specs
 
 import composer
 import mjcf
@@ -174,3 +175,35 @@ def test_substep_hooks_get_the_action_and_the_environments_random_state_every_su
     # before_substep sees the time before each physics step, after_substep the time after.
     np.testing.assert_allclose([t for *_, t in task.before], np.arange(10) * 0.002)
     np.testing.assert_allclose([t for _, t in task.after], np.arange(1, 11) * 0.002)
+
+
+class ShiftsTimeAfterStep(ClockTask):
+    """Moves the clock on by 100 s in `after_step`; `substep_hooks` adds a sub-step hook."""
+
+    def __init__(self, substep_hooks):
+        super().__init__()
+        if substep_hooks:
+            self.before_substep = lambda physics, action, random_state: None
+
+    def after_step(self, physics, random_state):
+        super().after_step(physics, random_state)
+        physics.data.time += 100.0
+
+
+@pytest.mark.parametrize("substep_hooks", [False, True])
+def test_final_observation_is_taken_after_the_after_step_hooks(substep_hooks):
+    env = composer.Environment(ShiftsTimeAfterStep(substep_hooks))
+    env.reset()
+    clock = env.step(np.zeros(2)).observation["clock"].ravel()[0]
+    assert clock == pytest.approx(0.02 + 100.0 + _CLOCK_OFFSET)
+
+
+class RewardSpecOnly(ClockTask):
+    def get_reward_spec(self):
+        return specs.Array((), np.float64, name="reward")
+
+
+def test_step_spec_needs_both_the_reward_and_the_discount_spec():
+    env = composer.Environment(RewardSpecOnly())
+    with pytest.warns(DeprecationWarning), pytest.raises(NotImplementedError, match="discount"):
+        env.step_spec()
