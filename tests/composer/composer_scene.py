@@ -113,3 +113,22 @@ class ReachTask(composer.Task):
 
     def get_discount(self, physics):
         return self.discount
+
+
+class Diverges(ReachTask):
+    """Makes the box's mass NaN before the control step numbered `diverge_at` of an episode."""
+
+    def __init__(self, diverge_at):
+        super().__init__()
+        self.diverge_at = diverge_at
+        self.steps = 0
+
+    def initialize_episode(self, physics, random_state):
+        super().initialize_episode(physics, random_state)
+        self.steps = 0
+
+    def before_step(self, physics, action, random_state):
+        super().before_step(physics, action, random_state)
+        self.steps += 1
+        if self.steps == self.diverge_at:
+            physics.bind(self.box.root_body).mass = np.nan

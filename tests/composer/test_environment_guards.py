@@ -4,7 +4,7 @@ checked where a plausible slip would otherwise go unnoticed."""
 import dm_env
 import numpy as np
 import pytest
-from composer_scene import ReachTask
+from composer_scene import Diverges
 from dm_env import specs
 
 import composer
@@ -14,18 +14,16 @@ from composer.observation import observable
 _CLOCK_OFFSET = 10.0
 
 
-class ClockTask(ReachTask):
-    """ReachTask with a task observable `clock` (physics time + 10, never zero), optionally
+class ClockTask(Diverges):
+    """Diverges with a task observable `clock` (physics time + 10, never zero), optionally
     delayed; counts `after_step` calls; makes the box's mass NaN before control step
     `diverge_at` of an episode."""
 
     def __init__(self, delay=None, diverge_at=None, shape=(1,)):
-        super().__init__()
+        super().__init__(diverge_at)
         self.shape = shape
         self.clock = observable.Generic(self._read_clock, delay=delay)
         self.clock.enabled = True
-        self.diverge_at = diverge_at
-        self.steps = 0
         self.after_steps = 0
         self.reads = []
 
@@ -36,16 +34,6 @@ class ClockTask(ReachTask):
     @property
     def task_observables(self):
         return {"clock": self.clock}
-
-    def initialize_episode(self, physics, random_state):
-        super().initialize_episode(physics, random_state)
-        self.steps = 0
-
-    def before_step(self, physics, action, random_state):
-        super().before_step(physics, action, random_state)
-        self.steps += 1
-        if self.steps == self.diverge_at:
-            physics.bind(self.box.root_body).mass = np.nan
 
     def after_step(self, physics, random_state):
         self.after_steps += 1
