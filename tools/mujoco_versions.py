@@ -17,6 +17,7 @@ or its install or test run breaks.
 from __future__ import annotations
 
 import argparse
+import hashlib
 import os
 import re
 import shutil
@@ -147,7 +148,12 @@ def _run(args: list[str], log, **kwargs) -> int:
 def _install(venv: Path, release: Release, log) -> str:
     """Builds `venv` for `release` unless it exists; returns a problem or ''."""
     marker = venv / ".installed"
-    if marker.exists():
+    # The project's requirements are part of what a venv was built with: rebuild when the
+    # `[test]` extra or the dependencies change.
+    built_with = (
+        f"{release.version} {hashlib.sha256((REPO / 'pyproject.toml').read_bytes()).hexdigest()}\n"
+    )
+    if marker.exists() and marker.read_text(encoding="utf-8") == built_with:
         return ""
     if _run([sys.executable, "-m", "venv", "--clear", str(venv)], log):
         return "venv creation failed"
@@ -169,7 +175,7 @@ def _install(venv: Path, release: Release, log) -> str:
             return "install failed"
     elif _run([*pip, "-e", f"{REPO}[test]", mujoco], log):
         return "install failed"
-    marker.write_text(release.version + "\n")
+    marker.write_text(built_with, encoding="utf-8")
     return ""
 
 

@@ -1,10 +1,13 @@
 """Appearance fields: writing them cannot change what mj_forward computes, proven per field."""
 
+import copy
+
 import mujoco
 import numpy as np
 import pytest
 
 import mjcf
+from mjcf import schema
 from mjcf.appearance import APPEARANCE_FIELDS, forward_neutral_fields
 
 # Every kind of object that carries a colour or a material, with sensors that read contacts,
@@ -18,7 +21,7 @@ _SCENE = """
     <material name="arm" texture="flat" emission=".2"/>
   </asset>
   <worldbody>
-    <light pos="0 0 3" texture="flat"/>
+    <light pos="0 0 3" {light_texture}/>
     <camera name="eye" pos="0 -2 1" xyaxes="1 0 0 0 .5 1"/>
     <geom name="floor" type="plane" size="2 2 .1" material="floor"/>
     <body name="box" pos="0 0 .3">
@@ -65,8 +68,14 @@ _RANGEFINDER = "<rangefinder name='range' site='beam'/>"
 
 
 def _scene(with_rangefinder: bool = False) -> mujoco.MjModel:
+    # Lights take a texture only in newer releases (light_texid); where they cannot, the
+    # installed MuJoCo has no such field to prove.
+    light_takes_texture = (
+        "texture" in schema.root_spec().children["worldbody"].children["light"].attributes
+    )
     return mujoco.MjModel.from_xml_string(
         _SCENE.format(
+            light_texture='texture="flat"' if light_takes_texture else "",
             extra_site=_RANGEFINDER_SITE if with_rangefinder else "",
             extra_sensor=_RANGEFINDER if with_rangefinder else "",
         )
@@ -82,8 +91,7 @@ def _moving_state(model: mujoco.MjModel) -> mujoco.MjData:
 
 
 def _forward_outputs(model: mujoco.MjModel, state: mujoco.MjData) -> dict[str, bytes]:
-    data = mujoco.MjData(model)
-    mujoco.mj_copyData(data, model, state)
+    data = copy.deepcopy(state)
     mujoco.mj_forward(model, data)
     return {
         name: getattr(data, name).tobytes()
@@ -99,13 +107,27 @@ def _perturbed(name: str, array: np.ndarray) -> np.ndarray:
     return (1 - array).astype(array.dtype)
 
 
+def _release() -> tuple[int, ...]:
+    return tuple(int(part) for part in mujoco.__version__.split(".")[:2])
+
+
 def test_every_appearance_field_leaves_forward_outputs_bit_identical():
+    if _release() < (3, 17):
+        pytest.skip(
+            f"mujoco {mujoco.__version__} leaves island maps (and on 3.16 the efm_* arrays) "
+            "unwritten when a model has no islands, so their bytes change with any earlier "
+            "write and a bit-for-bit comparison cannot be made; it holds from mujoco 3.17"
+        )
     model = _scene()
     state = _moving_state(model)
     reference = _forward_outputs(model, state)
-    # Arrays that differ between two identical calls (timers, if any) cannot be compared.
+    # Arrays that differ between identical calls cannot be compared: timers, and memory that
+    # some releases leave unwritten (mujoco 3.4's island maps when there are no islands).
     unstable = {
-        name for name, value in _forward_outputs(model, state).items() if value != reference[name]
+        name
+        for _ in range(4)
+        for name, value in _forward_outputs(model, state).items()
+        if value != reference[name]
     }
     assert forward_neutral_fields(model) == APPEARANCE_FIELDS
     for name in sorted(APPEARANCE_FIELDS):
@@ -129,12 +151,10 @@ def test_a_rangefinder_reads_geom_transparency_so_its_model_exempts_nothing():
     state = _moving_state(model)
     sensor = model.sensor("range").adr[0]
     box = model.geom("box").id
-    seen = mujoco.MjData(model)
-    mujoco.mj_copyData(seen, model, state)
+    seen = copy.deepcopy(state)
     mujoco.mj_forward(model, seen)
     model.geom_rgba[box, 3] = 0
-    hidden = mujoco.MjData(model)
-    mujoco.mj_copyData(hidden, model, state)
+    hidden = copy.deepcopy(state)
     mujoco.mj_forward(model, hidden)
     assert seen.sensordata[sensor] == pytest.approx(1.3, abs=0.01)
     # The floor belongs to the beam's own body (the world), which the ray does not see.
