@@ -31,6 +31,17 @@ _MAX_DEPTH = 499
 _CLASS_REFERENCES = ("class", "childclass")
 
 
+class MJCFSyntaxError(etree.XMLSyntaxError, ValueError):
+    """Malformed XML: a `ValueError`, and lxml's `XMLSyntaxError`, which dm_control raises."""
+
+    @classmethod
+    def wrapping(cls, error: etree.XMLSyntaxError, context: str) -> MJCFSyntaxError:
+        """The same error, its message prefixed with `context`."""
+        return cls(
+            f"{context}: {error.msg}", error.code, error.lineno, error.offset, error.filename
+        )
+
+
 def from_xml_string(
     xml_string: str | bytes,
     escape_separators: bool = False,
@@ -53,7 +64,7 @@ def from_xml_string(
     try:
         document = _parse_xml(xml_string)
     except etree.XMLSyntaxError as error:
-        raise ValueError(f"invalid MJCF XML: {error}") from None
+        raise MJCFSyntaxError.wrapping(error, "invalid MJCF XML") from None
     return _build(document, escape_separators, model_dir, resolve_references, assets)
 
 
@@ -149,7 +160,9 @@ def _read_include(file_name: str, model_dir: str, assets: dict | None):
     try:
         return _parse_xml(text)
     except etree.XMLSyntaxError as error:
-        raise ValueError(f"<include file={file_name!r}>: invalid XML: {error}") from None
+        raise MJCFSyntaxError.wrapping(
+            error, f"<include file={file_name!r}>: invalid XML"
+        ) from None
 
 
 def _parse_xml(text: bytes):

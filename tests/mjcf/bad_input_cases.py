@@ -14,7 +14,13 @@ import sys
 import time
 
 #: Exception types a bad input may raise (docs/mujoco_differences.md).
-DOCUMENTED = ("ValueError", "FileNotFoundError", "IsADirectoryError", "PermissionError")
+DOCUMENTED = (
+    "ValueError",
+    "MJCFSyntaxError",
+    "FileNotFoundError",
+    "IsADirectoryError",
+    "PermissionError",
+)
 
 _SEED = """<mujoco model="m">
   <asset><mesh name="m" file="mesh.stl"/></asset>

@@ -203,3 +203,13 @@ def test_from_zip_of_a_non_archive_is_value_error(tmp_path):
     path.write_text("<mujoco/>")
     with pytest.raises(ValueError, match="not a zip"):
         mjcf.from_zip(str(path))
+
+
+def test_malformed_xml_is_a_value_error_and_lxmls_syntax_error():
+    from lxml import etree
+
+    with pytest.raises(ValueError, match="invalid MJCF XML") as raised:
+        mjcf.from_xml_string("<mujoco><worldbody>")
+    # dm_control lets lxml's own error through; code that catches it keeps working.
+    assert isinstance(raised.value, etree.XMLSyntaxError)
+    assert raised.value.lineno == 1
