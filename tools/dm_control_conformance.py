@@ -27,8 +27,10 @@ import xml.etree.ElementTree as ElementTree
 from pathlib import Path
 from typing import NamedTuple
 
-REPO = Path(__file__).resolve().parent.parent
-CACHE = REPO / ".cache" / "dm_control_conformance"
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+import scratch_venv  # noqa: E402
+
+CACHE = scratch_venv.CACHE / "dm_control_conformance"
 DM_CONTROL_VERSION = "1.0.50"
 TEST_EXTRAS = ["mock", "pytest"]
 
@@ -147,30 +149,6 @@ class FileResult(NamedTuple):
     passed: int
     failed: int
     skipped: int
-
-
-def _run(cmd: list, **kwargs) -> subprocess.CompletedProcess:
-    return subprocess.run(cmd, check=True, **kwargs)
-
-
-def build_venv() -> Path:
-    """Creates (once) the scratch venv; returns its python."""
-    venv = CACHE / "venv"
-    python = venv / "bin" / "python"
-    stamp = venv / "conformance-stamp"
-    wanted = f"dm-control=={DM_CONTROL_VERSION} " + " ".join(TEST_EXTRAS)
-    if stamp.exists() and stamp.read_text(encoding="utf-8") == wanted:
-        # Refresh the project itself: it is installed from the working tree every run.
-        _run([str(python), "-m", "pip", "install", "-q", "--no-deps", "-e", str(REPO)])
-        return python
-    shutil.rmtree(venv, ignore_errors=True)
-    _run([sys.executable, "-m", "venv", str(venv)])
-    _run([str(python), "-m", "pip", "install", "-q", "--upgrade", "pip"])
-    _run([str(python), "-m", "pip", "install", "-q", "-e", str(REPO)])
-    _run([str(python), "-m", "pip", "install", "-q", f"dm-control=={DM_CONTROL_VERSION}"])
-    _run([str(python), "-m", "pip", "install", "-q", *TEST_EXTRAS])
-    stamp.write_text(wanted)
-    return python
 
 
 def copy_tests(python: Path) -> Path:
@@ -314,7 +292,9 @@ def main() -> int:
     parser.add_argument("--tasks-only", action="store_true")
     args = parser.parse_args()
     CACHE.mkdir(parents=True, exist_ok=True)
-    python = build_venv()
+    python = scratch_venv.ensure_venv(
+        CACHE / "venv", [f"dm-control=={DM_CONTROL_VERSION}", *TEST_EXTRAS]
+    )
     status = 0
     if not args.tasks_only:
         results, failing = run_tests(python, copy_tests(python))
