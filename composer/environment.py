@@ -414,7 +414,7 @@ class Environment(dm_env.Environment):
                 raise
             logging.warning("Physics error, ending the episode: %s", error)
             hooks.after_step(physics, random_state)
-            updater.update()
+            updater.finish_control_step()
             self._reset_next_step = True
             return dm_env.TimeStep(_LAST, 0.0, 0.0, updater.get_observation())
         if hooks.has_after_step_hooks:

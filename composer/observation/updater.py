@@ -611,6 +611,21 @@ class Updater:
         self._due_index = index
         self._next_due = self._sample_steps[index] if index < len(self._sample_steps) else _NEVER
 
+    def finish_control_step(self) -> None:
+        """Counts the rest of the planned control step as passed, sampling everything still
+        due in it from the current physics state.
+
+        For a control step cut short, e.g. by a `PhysicsError`: the observation then shows
+        the state the physics was left in, as after a complete step.
+        """
+        if self._enabled_structure is None:
+            self._check_reset()
+        while self._next_due is not _NEVER:
+            self.update(self._next_due - (self._step_counter - self._plan_start))
+        remaining = self._steps - (self._step_counter - self._plan_start)
+        if remaining > 0:
+            self.update(remaining)
+
     def get_observation(self):
         """Returns new arrays the caller owns, in the structure of `observables`."""
         if self._enabled_structure is None:

@@ -72,10 +72,14 @@ def test_legacy_step_choice_survives_recompiling_every_episode():
     assert env.physics.legacy_step is False
 
 
-def test_diverging_step_still_runs_after_step_and_updates_the_observation():
-    # One sub-step per control step: the final update is then the step's only sample.
+@pytest.mark.parametrize("n_sub_steps", [1, 3])
+def test_diverging_step_still_runs_after_step_and_updates_the_observation(n_sub_steps):
+    # Default observables are sampled once, at the end of each control step; a diverging
+    # step must still take that sample, whatever the number of sub-steps.
     task = ClockTask(diverge_at=2)
-    env = composer.Environment(task, raise_exception_on_physics_error=False, n_sub_steps=1)
+    env = composer.Environment(
+        task, raise_exception_on_physics_error=False, n_sub_steps=n_sub_steps
+    )
     env.reset()
     steps, timestep = 0, None
     while steps < 5 and (timestep is None or not timestep.last()):

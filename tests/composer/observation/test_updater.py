@@ -202,6 +202,35 @@ def test_update_skipping_a_sample_step_raises():
         obs_updater.update(num_steps=10)
 
 
+def test_finish_control_step_samples_what_is_still_due_from_the_current_state():
+    # A control step of 10 sub-steps cut short after 4: the buffer of 3 is due at 8, 9 and
+    # 10, and all three samples read the state the physics was left in (time 4). The next
+    # control step then starts on schedule, 10 sub-steps in.
+    clock = _Clock()
+    obs_updater = updater.Updater({"t": _scalar(buffer_size=3)}, 10)
+    obs_updater.reset(clock, np.random.RandomState(0))
+    obs_updater.prepare_for_next_control_step()
+    clock.time = 4
+    obs_updater.finish_control_step()
+    assert list(obs_updater.get_observation()["t"]) == [4, 4, 4]
+    obs_updater.prepare_for_next_control_step()
+    assert obs_updater.sample_steps == (8, 9, 10)
+
+
+def test_finish_control_step_with_nothing_due_still_counts_the_whole_step():
+    clock = _Clock()
+    obs_updater = updater.Updater({"t": _scalar(update_interval=3)}, 2)
+    obs_updater.reset(clock, np.random.RandomState(0))
+    obs_updater.prepare_for_next_control_step()
+    assert obs_updater.sample_steps == ()
+    clock.time = 1
+    obs_updater.finish_control_step()
+    assert list(obs_updater.get_observation()["t"]) == [0]
+    obs_updater.prepare_for_next_control_step()
+    # Sub-step 3 of the episode, the first of the coming control step, is due.
+    assert obs_updater.sample_steps == (1,)
+
+
 def test_update_interval_three_observes_every_third_step():
     observations = _run({"t": _scalar(update_interval=3, buffer_size=3)}, 2, 4)
     assert [list(o["t"]) for o in observations] == [
