@@ -262,7 +262,7 @@ class Environment(dm_env.Environment):
            `modification_count`) and the compiled model has a `ModelSnapshot`. The
            parameters saved right after compiling are written back, undoing writes made
            through `physics.bind` during the episode. Nothing is compiled; the action
-           check stays; the observation updater is rebuilt only if the sub-steps changed.
+           check stays.
         2. Load parameters: the tree changed, but its new compile has the same structure
            as the current model (`ModelSnapshot.load`: only float parameters such as
            colours, sizes and masses differ). They are loaded into the current model in
@@ -270,25 +270,25 @@ class Environment(dm_env.Environment):
         3. New Physics: the structure changed, snapshots are not supported, or there is
            no model yet.
 
-        After 2 and 3, hooks are rescanned, the action check is rebuilt and the
-        observation updater is rebuilt unless the Physics, the sub-steps and the collected
-        observables are all the same (see `_same_collection`). After every outcome the
-        `after_compile` hooks run.
+        After 2 and 3, hooks are rescanned and the action check is rebuilt. After every
+        outcome the `after_compile` hooks run, and the observation updater is rebuilt
+        unless the Physics, the sub-steps and the task's observables (names and objects,
+        see `_same_collection`) are all the same as last time: as in dm_control, which
+        builds a new updater at every recompile, an observable added between episodes is
+        observed from the next reset.
         """
         root = self._task.root_entity.mjcf_model
         if self._snapshot is not None and root.modification_count == self._compiled_count:
             self._snapshot.restore()
             self._run_after_compile_hooks()
-            if self._task_sub_steps() != self._n_sub_steps:
-                self._rebuild_observation_updater(self._task.observables)
-            return
-        model = compile_mjcf_model(root)
-        self._compiled_count = root.modification_count
-        if self._snapshot is None or not self._snapshot.load(model):
-            self._replace_physics(root, model)
-        self._hooks.refresh_entity_hooks()
-        self._run_after_compile_hooks()
-        self._check_action = action_validator(self._task.action_spec(self._physics_proxy))
+        else:
+            model = compile_mjcf_model(root)
+            self._compiled_count = root.modification_count
+            if self._snapshot is None or not self._snapshot.load(model):
+                self._replace_physics(root, model)
+            self._hooks.refresh_entity_hooks()
+            self._run_after_compile_hooks()
+            self._check_action = action_validator(self._task.action_spec(self._physics_proxy))
         observables = self._task.observables
         collected = _collected(observables)
         if (

@@ -1,23 +1,33 @@
 #!/usr/bin/env bash
 # Mutation testing with mutmut (a benchmark, not run in CI): prints the kill rate and survivors.
 #
-# Usage: tools/mutation.sh [--max-children N] [FILE_OR_DIR ...]
+# Usage: tools/mutation.sh [--max-children N] [--name NAME] [--tests PATH ...] [FILE_OR_DIR ...]
 #   default targets: composer/environment.py composer/observation/ mjcf/physics.py mjcf/binding.py
+#   --tests: the test files or folders to draw on (default: all of tests/); a folder of
+#     tests that drive the targets directly keeps a run on a small machine to hours.
 #
-# Works on a copy of the tracked files under .cache/mutation/tree, with mutmut in its own
-# venv (.cache/mutation/venv), so the working tree and its venv are left alone. mutmut runs,
-# for each mutant, the tests that exercise the mutated function. Prints mutmut's summary,
-# the surviving mutants (inspect one with `cd .cache/mutation/tree && ../venv/bin/mutmut
-# show NAME`), and the kill rate: killed / (killed + survived), timeouts counted as killed.
+# Works on a copy of the tracked files under .cache/mutation/NAME (default "tree"), with
+# mutmut in its own venv (.cache/mutation/venv), so the working tree and its venv are left
+# alone. mutmut runs, for each mutant, the selected tests that exercise the mutated
+# function. Prints mutmut's summary, the surviving mutants (inspect one with `cd
+# .cache/mutation/NAME && ../venv/bin/mutmut show MUTANT`; rerun some after adding tests
+# with `../venv/bin/mutmut run MUTANT ...` once the new test files are copied in), and the
+# kill rate: killed / (killed + survived), timeouts counted as killed.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 repo=$(pwd)
 work="$repo/.cache/mutation"
 children=2
-if [ "${1:-}" = "--max-children" ]; then
-  children=$2
-  shift 2
-fi
+name=tree
+tests=()
+while [ $# -gt 0 ]; do
+  case "$1" in
+    --max-children) children=$2; shift 2 ;;
+    --name) name=$2; shift 2 ;;
+    --tests) tests+=("$2"); shift 2 ;;
+    *) break ;;
+  esac
+done
 targets=("$@")
 if [ "${#targets[@]}" -eq 0 ]; then
   targets=(composer/environment.py composer/observation/ mjcf/physics.py mjcf/binding.py)
@@ -30,9 +40,10 @@ if [ ! -x "$work/venv/bin/mutmut" ]; then
   "$work/venv/bin/pip" uninstall -q -y mujoco-composer
 fi
 
-rm -rf "$work/tree"
-mkdir -p "$work/tree"
-git ls-files -z | xargs -0 cp --parents -t "$work/tree"
+tree="$work/$name"
+rm -rf "$tree"
+mkdir -p "$tree"
+git ls-files -z | xargs -0 cp --parents -t "$tree"
 # Lists in mutmut's setup.cfg section are one item per (indented) line. mutmut runs the tests
 # inside mutants/, which holds only what it is told to copy: all of the tree.
 paths=$(printf '\n    %s' "${targets[@]}")
@@ -40,16 +51,21 @@ copied=$(git ls-files | cut -d/ -f1 | sort -u | sed 's/^/    /')
 # Tests that run this project in a Python subprocess of their own cannot see mutmut's copy.
 ignored=$(grep -l "sys.executable" tests -r --include "test_*.py" \
   | grep -v -e test_determinism.py -e test_bad_input.py | sed 's/^/    --ignore=/')
-cat > "$work/tree/setup.cfg" <<CFG
+selection=""
+if [ "${#tests[@]}" -gt 0 ]; then
+  selection=$(printf '\n    %s' "${tests[@]}")
+fi
+cat > "$tree/setup.cfg" <<CFG
 [mutmut]
 source_paths=$paths
 also_copy=
 $copied
 pytest_add_cli_args=
 $ignored
+pytest_add_cli_args_test_selection=$selection
 CFG
 
-cd "$work/tree"
+cd "$tree"
 export MUJOCO_GL=egl
 "$work/venv/bin/mutmut" run --max-children "$children" || true
 "$work/venv/bin/mutmut" results || true
