@@ -148,3 +148,48 @@ def test_latest_sample_buffer_holds_its_sample_in_the_storage_it_is_given():
 def test_latest_sample_buffer_rejects_storage_of_another_shape():
     with pytest.raises(ValueError, match=r"storage must be .* shape \(1, 3\)"):
         LatestSampleBuffer((3,), np.float64, storage=np.zeros(3))
+
+
+def _expected_read(inserted, size, read_time):
+    """The last `size` samples delivered by `read_time`, oldest first, zero-padded in front:
+    delivery order is arrival time, then insertion order."""
+    delivered = sorted(
+        (arrival, order, value)
+        for order, (arrival, value) in enumerate(inserted)
+        if arrival <= read_time
+    )
+    values = [value for _, _, value in delivered][-size:]
+    return [0] * (size - len(values)) + values
+
+
+@pytest.mark.parametrize(
+    ("size", "max_delay", "max_time_step"),
+    [(1, 4, 1), (3, 8, 2), (5, 8, 1), (12, 19, 3), (10, 4, 0)],
+    ids=["one", "three", "five", "twelve", "all_at_one_time"],
+)
+def test_random_delays_read_like_a_sorted_list_of_arrivals(size, max_delay, max_time_step):
+    # Random delays make samples arrive out of order and keep many in flight, which makes
+    # the buffer insert out of order and grow; every read must still be what a plain
+    # sorted list of arrivals gives.
+    rng = np.random.default_rng(size)
+    buffer = Buffer(size, (), np.int32)
+    inserted = []
+    time = 0
+    for value in range(1, 301):
+        time += int(rng.integers(0, max_time_step + 1))
+        delay = int(rng.integers(0, max_delay + 1))
+        buffer.insert(time, delay, np.int32(value))
+        inserted.append((time + delay, value))
+        read = buffer.read(time)
+        assert read.dtype == np.int32
+        assert read.tolist() == _expected_read(inserted, size, time)
+
+
+def test_drop_keeps_a_sample_that_arrives_with_an_older_one_already_held():
+    # The held sample (taken at 1, delay 3) and the scheduled one (taken at 4, no delay)
+    # both arrive at 4; the scheduled one is newer, so the read at 4 returns it.
+    buffer = Buffer(1, (), np.float64)
+    buffer.insert(1, 3, 1.0)
+    schedule = [(4, 0)]
+    buffer.drop_unobserved_upcoming_items(schedule, read_interval=1)
+    assert schedule == [(4, 0)]

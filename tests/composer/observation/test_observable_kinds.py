@@ -180,3 +180,79 @@ def test_spec_and_observation_agree_for_every_kind(scene, strip):
     assert list(specs) == list(observation) == list(observables)
     for name, spec in specs.items():
         spec.validate(observation[name])
+
+
+def _lowest(physics):
+    return np.zeros(1)
+
+
+class _Opaque:
+    """A callable without a `__qualname__` attribute of its own."""
+
+    def __call__(self, physics):
+        return np.zeros(1)
+
+    def __getattribute__(self, name):
+        if name == "__qualname__":
+            raise AttributeError(name)
+        return object.__getattribute__(self, name)
+
+    def __repr__(self):
+        return "opaque"
+
+
+def test_reprs_name_the_kind_and_what_is_observed(scene):
+    # What a user sees when printing `task.observables` while debugging.
+    assert repr(observable.Generic(_lowest)) == "<Generic observable of _lowest>"
+    assert repr(observable.Generic(_Opaque())) == "<Generic observable of opaque>"
+    feature = observable.MJCFFeature("xpos", scene.tip)
+    assert repr(feature) == f"<MJCFFeature observable 'xpos' of {scene.tip!r}>"
+    assert repr(feature[0][1:]) == (
+        f"<MJCFFeature observable 'xpos'[0][slice(1, None, None)] of {scene.tip!r}>"
+    )
+    assert repr(observable.Generic(_lowest)[0]) == "<Generic observable of _lowest>[0]"
+    assert repr(observable.MujocoFeature("qpos", "hinge")) == (
+        "<MujocoFeature observable qpos['hinge']>"
+    )
+
+
+class _Plain(observable.Observable):
+    def _callable(self, physics):
+        return lambda: np.zeros(1)
+
+
+def test_repr_of_a_user_subclass_names_the_subclass():
+    assert repr(_Plain(1, None, None, None, None)) == "<_Plain observable>"
+
+
+def _with_options(obs):
+    return (obs.update_interval, obs.buffer_size, obs.delay, obs.aggregator, obs.corruptor)
+
+
+def _double(value, random_state):
+    return 2 * value
+
+
+@pytest.mark.parametrize("kind", ["mjcf_feature", "generic"])
+def test_indexing_keeps_every_option_of_the_observable(scene, kind):
+    options = dict(update_interval=3, buffer_size=4, delay=2, aggregator="max", corruptor=_double)
+    if kind == "mjcf_feature":
+        obs = observable.MJCFFeature("xpos", scene.tip, **options)
+    else:
+        obs = observable.Generic(lambda physics: np.ones(3), **options)
+    assert _with_options(obs[1:]) == _with_options(obs)
+    assert _with_options(obs[1:]) == (3, 4, 2, obs.aggregator, _double)
+
+
+def test_updater_follows_a_mujoco_feature_named_by_a_callable(scene):
+    # The updater gathers plain features from MuJoCo's arrays; a callable name is read
+    # through the callable at every sample instead.
+    names = ["slide"]
+    obs = _enabled(observable.MujocoFeature("qpos", lambda: names))
+    obs_updater = updater.Updater({"joint": obs})
+    obs_updater.reset(scene.physics, np.random.RandomState(0))
+    np.testing.assert_allclose(obs_updater.get_observation()["joint"], [[0.25]])
+    names[0] = "hinge"
+    obs_updater.prepare_for_next_control_step()
+    obs_updater.update()
+    np.testing.assert_allclose(obs_updater.get_observation()["joint"], [[0.5]])

@@ -2,6 +2,7 @@
 
 import collections
 import contextlib
+import functools
 import itertools
 
 import numpy as np
@@ -231,6 +232,22 @@ def test_finish_control_step_with_nothing_due_still_counts_the_whole_step():
     assert obs_updater.sample_steps == (1,)
 
 
+def test_finish_control_step_counts_from_where_the_step_was_cut():
+    # Control steps of 2 sub-steps, sampled every 5th sub-step. The second control step
+    # (sub-steps 3-4) is cut after sub-step 3; finishing it brings the count to 4, so the
+    # third control step (sub-steps 5-6) samples at its first sub-step.
+    clock = _Clock()
+    obs_updater = updater.Updater({"t": _scalar(update_interval=5)}, 2)
+    obs_updater.reset(clock, np.random.RandomState(0))
+    obs_updater.prepare_for_next_control_step()
+    obs_updater.update(num_steps=2)
+    obs_updater.prepare_for_next_control_step()
+    obs_updater.update()
+    obs_updater.finish_control_step()
+    obs_updater.prepare_for_next_control_step()
+    assert obs_updater.sample_steps == (1,)
+
+
 def test_update_interval_three_observes_every_third_step():
     observations = _run({"t": _scalar(update_interval=3, buffer_size=3)}, 2, 4)
     assert [list(o["t"]) for o in observations] == [
@@ -319,6 +336,62 @@ def test_stochastic_interval_reproducible_with_a_seed_and_varies_across_seeds():
 def test_option_callable_without_random_state_is_called_without_arguments():
     observations = _run({"t": _scalar(update_interval=lambda: 2, buffer_size=2)}, 3, 2)
     assert [list(o["t"]) for o in observations] == [[0, 0], [0, 2], [4, 6]]
+
+
+def _interval_two_given_a_random_state(**kwargs):
+    return 2 if isinstance(kwargs.get("random_state"), np.random.RandomState) else 99
+
+
+@pytest.mark.parametrize(
+    "interval",
+    [
+        lambda scale=2: scale,
+        _interval_two_given_a_random_state,
+        functools.partial(next, itertools.repeat(2)),
+    ],
+    ids=["other_parameter", "keyword_arguments", "builtin_without_signature"],
+)
+def test_option_callable_gets_the_random_state_exactly_when_it_can_take_it(interval):
+    # A parameter named random_state or **kwargs gets it; anything else, and a builtin
+    # whose signature cannot be read, is called without arguments.
+    observations = _run({"t": _scalar(update_interval=interval, buffer_size=2)}, 3, 2)
+    assert [list(o["t"]) for o in observations] == [[0, 0], [0, 2], [4, 6]]
+
+
+def test_random_options_are_drawn_two_control_steps_ahead():
+    # Which draw of a shared random state goes to which observable depends on how far
+    # ahead the schedule is drawn: up to two control steps past the current step.
+    interval_draws, delay_draws = [], []
+
+    def interval():
+        interval_draws.append(5)
+        return 5
+
+    def delay():
+        delay_draws.append(0)
+        return 0
+
+    obs_updater = updater.Updater({"t": _scalar(update_interval=interval, delay=delay)}, 5)
+    obs_updater.reset(_Clock(), np.random.RandomState(0))
+    obs_updater.prepare_for_next_control_step()
+    # Samples at 5 and 10 reach the horizon of 10 sub-steps; none is drawn for 15. The
+    # first sample, at reset, drew a delay of its own.
+    assert len(interval_draws) == 2
+    assert len(delay_draws) == 1 + 2
+
+
+def test_random_interval_samples_only_what_a_read_returns():
+    # Every sub-step is scheduled, but one sample per control step is ever observed.
+    calls = []
+
+    def read(physics):
+        calls.append(physics.time)
+        return float(physics.time)
+
+    obs = _enabled(observable.Generic(read, update_interval=lambda: 1))
+    observations = _run({"t": obs}, 5, 3)
+    assert [list(o["t"]) for o in observations] == [[0], [5], [10], [15]]
+    assert [time for time in calls if time > 0] == [5, 10, 15]
 
 
 def test_stochastic_interval_below_one_is_an_error_naming_observable_and_option():
