@@ -55,6 +55,9 @@ selection=""
 if [ "${#tests[@]}" -gt 0 ]; then
   selection=$(printf '\n    %s' "${tests[@]}")
 fi
+# Workers fork from a server that has only collected the tests: forked from mutmut's main
+# process, which has rendered with EGL while collecting stats, a worker that renders hangs,
+# and the hang would be counted as a kill (a timeout).
 cat > "$tree/setup.cfg" <<CFG
 [mutmut]
 source_paths=$paths
@@ -63,10 +66,16 @@ $copied
 pytest_add_cli_args=
 $ignored
 pytest_add_cli_args_test_selection=$selection
+timeout_multiplier=2
+timeout_constant=3
+process_isolation=forkserver
 CFG
 
 cd "$tree"
 export MUJOCO_GL=egl
+# The copy is not a repository of its own: without this, mutmut would read this checkout's
+# git history, and a commit made during the run would make it drop its test associations.
+export GIT_CEILING_DIRECTORIES="$work"
 "$work/venv/bin/mutmut" run --max-children "$children" || true
 "$work/venv/bin/mutmut" results || true
 "$work/venv/bin/mutmut" export-cicd-stats >/dev/null
