@@ -234,7 +234,8 @@ class Environment(dm_env.Environment):
         return dm_env.TimeStep(None, reward, discount, self.observation_spec())
 
     def close(self) -> None:
-        """Frees the physics; the environment cannot be used afterwards."""
+        """Frees the physics. Closing again does nothing; a later `reset()` compiles a new
+        Physics and starts an episode as on the first reset."""
         if self._physics is not None:
             self._physics.free()
         self._physics = None

@@ -244,6 +244,15 @@ def test_close_frees_the_physics():
         proxy.time()
 
 
+def test_close_twice_is_harmless_and_reset_after_close_builds_a_new_physics():
+    env = composer.Environment(ReachTask())
+    env.reset()
+    env.close()
+    env.close()
+    assert env.reset().first()
+    assert env.step(np.zeros(2)).mid()
+
+
 @pytest.mark.parametrize("copier", [copy.copy, copy.deepcopy, pickle.dumps])
 def test_copying_an_environment_says_how_to_get_another(copier):
     env = composer.Environment(ReachTask())

@@ -256,3 +256,18 @@ def test_updater_follows_a_mujoco_feature_named_by_a_callable(scene):
     obs_updater.prepare_for_next_control_step()
     obs_updater.update()
     np.testing.assert_allclose(obs_updater.get_observation()["joint"], [[0.5]])
+
+
+@pytest.mark.parametrize("kind", ["mjcf", "mujoco"])
+def test_camera_defaults_are_dm_controls(scene, kind):
+    # dm_control's defaults: a 240x320 RGB image sampled every step; buffer and delay left
+    # to the updater's defaults.
+    if kind == "mjcf":
+        camera = observable.MJCFCamera(scene.camera)
+    else:
+        camera = observable.MujocoCamera("top")
+    spec = camera.array_spec
+    assert (spec.shape, spec.dtype) == ((240, 320, 3), np.uint8)
+    assert (camera.update_interval, camera.buffer_size, camera.delay) == (1, None, None)
+    assert (camera.depth, camera.segmentation) == (False, False)
+    assert camera(scene.physics).shape == (240, 320, 3)
