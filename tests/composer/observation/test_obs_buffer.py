@@ -95,15 +95,46 @@ def test_wrong_shape_is_rejected_with_both_shapes():
         buffer.insert(0, 0, [1.0, 2.0])
 
 
-def test_float_sample_into_integer_buffer_is_rejected():
+@pytest.mark.parametrize("as_array", [False, True], ids=["python_float", "float_array"])
+def test_float_sample_into_integer_buffer_is_rejected(as_array):
     buffer = Buffer(1, (), np.uint8)
     with pytest.raises(ValueError, match="dtype float64"):
-        buffer.insert(0, 0, 1.5)
+        buffer.insert(0, 0, np.array(1.5) if as_array else 1.5)
 
 
-def test_buffer_size_below_one_is_rejected():
-    with pytest.raises(ValueError, match="buffer_size"):
-        Buffer(0, (), np.float64)
+def test_array_of_the_buffers_dtype_but_another_shape_is_rejected():
+    buffer = Buffer(1, (2,), np.float64)
+    with pytest.raises(ValueError, match=r"\(1,\).*\(2,\)"):
+        buffer.insert(0, 0, np.ones(1))
+
+
+@pytest.mark.parametrize(
+    ("value", "dtype", "expected"),
+    [([1, 2], np.float64, [1.0, 2.0]), (np.array([0.5, 1.5]), np.float32, [0.5, 1.5])],
+    ids=["ints_into_float64", "float64_into_float32"],
+)
+def test_samples_of_the_same_kind_are_cast_to_the_buffers_dtype(value, dtype, expected):
+    buffer = Buffer(1, (2,), dtype)
+    buffer.insert(0, 0, value)
+    read = buffer.read(0)
+    assert read.dtype == dtype
+    assert read.tolist() == [expected]
+
+
+def test_timestamp_earlier_than_the_previous_one_is_rejected_naming_both():
+    buffer = Buffer(1, (), np.float64)
+    buffer.insert(5, 0, 1.0)
+    buffer.insert(5, 0, 2.0)
+    with pytest.raises(ValueError) as raised:
+        buffer.insert(4, 0, 3.0)
+    assert str(raised.value) == "timestamp 4 precedes the previous one (5)"
+
+
+@pytest.mark.parametrize("size", [0, -1, True, 2.0, "2", None])
+def test_buffer_size_that_is_not_a_positive_integer_is_rejected(size):
+    with pytest.raises(ValueError) as raised:
+        Buffer(size, (), np.float64)
+    assert str(raised.value) == f"Buffer: buffer_size must be an integer >= 1, got {size!r}"
 
 
 def test_drop_removes_samples_displaced_before_the_next_read():

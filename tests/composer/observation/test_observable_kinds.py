@@ -1,5 +1,6 @@
 """Tests of each observable kind against a compiled scene (feature and camera observables)."""
 
+import mujoco
 import numpy as np
 import pytest
 
@@ -271,3 +272,72 @@ def test_camera_defaults_are_dm_controls(scene, kind):
     assert (camera.update_interval, camera.buffer_size, camera.delay) == (1, None, None)
     assert (camera.depth, camera.segmentation) == (False, False)
     assert camera(scene.physics).shape == (240, 320, 3)
+
+
+@pytest.mark.parametrize(
+    ("name", "expected"),
+    [("mean", [2.0, 20.0]), ("sum", [6, 60]), ("min", [1, 10]), ("max", [3, 30])],
+)
+@pytest.mark.parametrize("dtype", [np.float64, np.float32, np.int64])
+def test_named_aggregators_reduce_the_buffer_axis_for_every_dtype(name, expected, dtype):
+    buffer = np.array([[1, 10], [2, 20], [3, 30]], dtype)
+    aggregator = observable.Generic(lambda physics: 0, aggregator=name).aggregator
+    result = aggregator(buffer)
+    assert result.shape == (2,)
+    np.testing.assert_allclose(result, expected)
+
+
+def _options_of(obs):
+    return (obs.update_interval, obs.buffer_size, obs.delay, obs.aggregator, obs.corruptor)
+
+
+@pytest.mark.parametrize("kind", ["mujoco_feature", "mjcf_camera", "mujoco_camera"])
+def test_constructor_options_are_kept(scene, kind):
+    options = dict(update_interval=3, buffer_size=4, delay=2, aggregator="max", corruptor=_double)
+    if kind == "mujoco_feature":
+        obs = observable.MujocoFeature("qpos", "hinge", **options)
+    elif kind == "mjcf_camera":
+        obs = observable.MJCFCamera(scene.camera, height=8, width=12, **options)
+    else:
+        obs = observable.MujocoCamera("top", height=8, width=12, **options)
+    assert _options_of(obs)[:3] == (3, 4, 2)
+    assert obs.aggregator(np.array([[1.0], [5.0]])).tolist() == [5.0]
+    assert obs.corruptor is _double
+
+
+def test_mujoco_feature_samples_every_step_by_default():
+    assert observable.MujocoFeature("qpos", "hinge").update_interval == 1
+
+
+def test_mujoco_camera_accepts_a_camera_id(scene):
+    by_name = observable.MujocoCamera("top", height=8, width=12)(scene.physics)
+    by_id = observable.MujocoCamera(0, height=8, width=12)(scene.physics)
+    np.testing.assert_array_equal(by_id, by_name)
+
+
+def _red_pixels(image):
+    return int(np.sum((image[..., 0] > 150) & (image[..., 1] < 80)))
+
+
+@pytest.mark.parametrize("kind", ["mjcf_camera", "mujoco_camera"])
+def test_camera_scene_option_and_render_flags_reach_the_renderer(scene, kind):
+    def camera(**options):
+        if kind == "mjcf_camera":
+            return observable.MJCFCamera(scene.camera, height=24, width=32, **options)
+        return observable.MujocoCamera("top", height=24, width=32, **options)
+
+    plain = camera()(scene.physics)
+    assert _red_pixels(plain) > 0
+    # Hiding geom group 0 hides the red ball (and the floor).
+    hidden = mujoco.MjvOption()
+    hidden.geomgroup[0] = 0
+    assert _red_pixels(camera(scene_option=hidden)(scene.physics)) == 0
+    wireframe = camera(render_flag_overrides={"wireframe": True})(scene.physics)
+    assert not np.array_equal(wireframe, plain)
+    np.testing.assert_array_equal(camera()(scene.physics), plain)
+
+
+def test_mjcf_camera_error_for_a_non_element_names_the_observable():
+    with pytest.raises(ValueError) as raised:
+        observable.MJCFCamera("top")
+    assert str(raised.value) == "MJCFCamera: expected an mjcf.Element, got str: 'top'"
