@@ -1,10 +1,13 @@
 #!/usr/bin/env bash
 # Mutation testing with mutmut (a benchmark, not run in CI): prints the kill rate and survivors.
 #
-# Usage: tools/mutation.sh [--max-children N] [--name NAME] [--tests PATH ...] [FILE_OR_DIR ...]
+# Usage: tools/mutation.sh [--max-children N] [--name NAME] [--tests PATH ...] [--only PATTERN ...]
+#                         [FILE_OR_DIR ...]
 #   default targets: composer/environment.py composer/observation/ mjcf/physics.py mjcf/binding.py
 #   --tests: the test files or folders to draw on (default: all of tests/); a folder of
 #     tests that drive the targets directly keeps a run on a small machine to hours.
+#   --only: run just the mutants whose names match (fnmatch patterns, e.g. the survivors of
+#     an earlier run, or 'composer.environment.*'); the kill rate then counts only those.
 #
 # Works on a copy of the tracked files under .cache/mutation/NAME (default "tree"), with
 # mutmut in its own venv (.cache/mutation/venv), so the working tree and its venv are left
@@ -20,11 +23,13 @@ work="$repo/.cache/mutation"
 children=2
 name=tree
 tests=()
+only=()
 while [ $# -gt 0 ]; do
   case "$1" in
     --max-children) children=$2; shift 2 ;;
     --name) name=$2; shift 2 ;;
     --tests) tests+=("$2"); shift 2 ;;
+    --only) only+=("$2"); shift 2 ;;
     *) break ;;
   esac
 done
@@ -76,7 +81,7 @@ export MUJOCO_GL=egl
 # The copy is not a repository of its own: without this, mutmut would read this checkout's
 # git history, and a commit made during the run would make it drop its test associations.
 export GIT_CEILING_DIRECTORIES="$work"
-"$work/venv/bin/mutmut" run --max-children "$children" || true
+"$work/venv/bin/mutmut" run --max-children "$children" "${only[@]}" || true
 "$work/venv/bin/mutmut" results || true
 "$work/venv/bin/mutmut" export-cicd-stats >/dev/null
 python3 - <<'PY'

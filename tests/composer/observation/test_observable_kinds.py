@@ -341,3 +341,10 @@ def test_mjcf_camera_error_for_a_non_element_names_the_observable():
     with pytest.raises(ValueError) as raised:
         observable.MJCFCamera("top")
     assert str(raised.value) == "MJCFCamera: expected an mjcf.Element, got str: 'top'"
+
+
+def test_a_one_pixel_camera_is_allowed_and_zero_is_not(scene):
+    pixel = observable.MujocoCamera("top", height=1, width=1)
+    assert pixel(scene.physics).shape == (1, 1, 3)
+    with pytest.raises(ValueError, match="option 'height' must be an integer >= 1; got 0"):
+        observable.MujocoCamera("top", height=0, width=1)
