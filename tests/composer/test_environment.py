@@ -7,12 +7,13 @@ import weakref
 import dm_env
 import numpy as np
 import pytest
-from composer_scene import ReachTask
+from composer_scene import Arm, ReachTask
 from dm_env import specs
 
 import composer
 import mjcf
 from composer import environment
+from composer.observation import observable
 
 
 class EndsWhenBoxIsHigh(ReachTask):
@@ -175,6 +176,16 @@ def test_deprecated_step_spec_without_task_specs_is_not_implemented():
     assert str(raised.value) == "step_spec: the task ReachTask defines no reward spec"
 
 
+def test_environment_physics_refuses_elements_of_another_model():
+    # An arm built the same way but never attached: its names exist in the compiled model,
+    # yet binding it would silently read the attached arm.
+    env = composer.Environment(ReachTask())
+    env.reset()
+    stray = Arm()
+    with pytest.raises(ValueError, match="belongs to another model"):
+        env.physics.bind(stray.joints)
+
+
 def test_physics_property_is_a_weak_proxy():
     env = composer.Environment(ReachTask())
     assert isinstance(env.physics, weakref.ProxyType)
@@ -227,13 +238,111 @@ def test_huge_but_finite_action_is_accepted():
     [
         ({"max_reset_attempts": 0}, "max_reset_attempts: expected an integer >= 1, got 0"),
         ({"n_sub_steps": 2.5}, "n_sub_steps: expected an integer >= 1, got 2.5"),
-        ({"time_limit": -1.0}, "time_limit: expected a number of seconds >= 0"),
-        ({"delayed_observation_padding": 0}, "delayed_observation_padding: expected"),
+        ({"time_limit": -1.0}, "time_limit: expected a number of seconds >= 0, got -1.0"),
+        ({"time_limit": "10"}, "time_limit: expected a number of seconds >= 0, got '10'"),
+        ({"time_limit": float("nan")}, "time_limit: expected a number of seconds >= 0, got nan"),
+        (
+            {"delayed_observation_padding": 0},
+            "delayed_observation_padding: expected ObservationPadding.ZERO or "
+            "ObservationPadding.INITIAL_VALUE, got 0",
+        ),
     ],
 )
 def test_bad_constructor_arguments_are_named(kwargs, message):
-    with pytest.raises(ValueError, match=message):
+    with pytest.raises(ValueError) as raised:
         composer.Environment(ReachTask(), **kwargs)
+    assert str(raised.value) == message
+
+
+def test_defaults_are_dm_controls():
+    # One reset attempt, legacy stepping, no time limit.
+    class FailsOnce(ReachTask):
+        failed = False
+
+        def initialize_episode(self, physics, random_state):
+            if not self.failed:
+                self.failed = True
+                raise composer.EpisodeInitializationError("first attempt")
+            super().initialize_episode(physics, random_state)
+
+    env = composer.Environment(FailsOnce())
+    assert env.physics.legacy_step is True
+    with pytest.raises(composer.EpisodeInitializationError):
+        env.reset()
+    env.reset()
+    for _ in range(200):
+        assert env.step(np.zeros(2)).mid()
+
+
+def test_a_time_limit_of_zero_ends_the_episode_at_the_first_step():
+    env = composer.Environment(ReachTask(), time_limit=0)
+    env.reset()
+    assert env.step(np.zeros(2)).last()
+
+
+def test_the_episode_ends_at_the_step_that_reaches_the_time_limit_exactly():
+    # The limit is the physics time after three steps, as MuJoCo accumulated it.
+    probe = composer.Environment(ReachTask())
+    probe.reset()
+    for _ in range(3):
+        probe.step(np.zeros(2))
+    limit = probe.physics.data.time
+    env = composer.Environment(ReachTask(), time_limit=limit)
+    env.reset()
+    assert [env.step(np.zeros(2)).step_type for _ in range(3)] == [
+        dm_env.StepType.MID,
+        dm_env.StepType.MID,
+        dm_env.StepType.LAST,
+    ]
+
+
+class PhysicsDiscount(ReachTask):
+    """Discount: the arm tip's height, read from the physics."""
+
+    def get_discount(self, physics):
+        return float(physics.bind(self.arm.tip).xpos[2])
+
+
+def test_discount_is_computed_from_the_physics():
+    env = composer.Environment(PhysicsDiscount())
+    env.reset()
+    timestep = env.step(np.zeros(2))
+    assert timestep.discount == pytest.approx(env.physics.bind(env.task.arm.tip).xpos[2])
+
+
+class RandomObservables(ReachTask):
+    """A task observable with a random update interval and a noisy corruptor, both drawing
+    from the random state they are given."""
+
+    def __init__(self):
+        super().__init__()
+        self.states = []
+        self.noisy = observable.Generic(
+            lambda physics: np.zeros(1),
+            update_interval=self._interval,
+            corruptor=self._corrupt,
+        )
+        self.noisy.enabled = True
+
+    def _interval(self, random_state):
+        self.states.append(random_state)
+        return 1 + random_state.randint(2)
+
+    def _corrupt(self, value, random_state):
+        self.states.append(random_state)
+        return value + random_state.normal()
+
+    @property
+    def task_observables(self):
+        return {"noisy": self.noisy}
+
+
+def test_random_observable_options_draw_from_the_environments_random_state():
+    task = RandomObservables()
+    env = composer.Environment(task, random_state=3)
+    env.reset()
+    env.step(np.zeros(2))
+    assert task.states and all(state is env.random_state for state in task.states)
 
 
 def test_close_frees_the_physics():
@@ -249,6 +358,7 @@ def test_close_twice_is_harmless_and_reset_after_close_builds_a_new_physics():
     env = composer.Environment(ReachTask())
     env.reset()
     env.close()
+    assert env.physics is None
     env.close()
     assert env.reset().first()
     assert env.step(np.zeros(2)).mid()

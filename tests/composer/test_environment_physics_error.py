@@ -63,3 +63,52 @@ def test_physics_error_during_episode_leaves_next_episode_unaffected():
 
 def test_composer_reexports_mjcf_physics_error():
     assert composer.PhysicsError is mjcf.PhysicsError
+
+
+class RecordsAfterStep(Diverges):
+    def __init__(self, diverge_at):
+        super().__init__(diverge_at)
+        self.after_step_calls = []
+
+    def after_step(self, physics, random_state):
+        self.after_step_calls.append((physics.model.nbody, random_state))
+
+
+def test_divergence_is_logged_and_after_step_gets_the_physics_and_random_state(caplog):
+    task = RecordsAfterStep(diverge_at=1)
+    env = composer.Environment(task, raise_exception_on_physics_error=False)
+    env.reset()
+    with caplog.at_level(logging.WARNING):
+        assert env.step(np.zeros(2)).last()
+    assert any(
+        r.getMessage().startswith("Physics error, ending the episode: Physics state is invalid")
+        for r in caplog.records
+    )
+    ((nbody, random_state),) = task.after_step_calls
+    assert nbody == env.physics.model.nbody and random_state is env.random_state
+
+
+class DivergesAfterCompile(Diverges):
+    """Its after_compile hook records its arguments and makes the physics diverge."""
+
+    def __init__(self):
+        super().__init__(diverge_at=None)
+        self.after_compile_calls = []
+
+    def after_compile(self, physics, random_state):
+        self.after_compile_calls.append((physics.model.nbody, random_state))
+        physics.data.qpos[:] = np.nan
+        physics.step()
+
+
+def test_a_divergence_in_after_compile_is_logged_and_the_episode_still_starts(caplog):
+    task = DivergesAfterCompile()
+    with caplog.at_level(logging.WARNING):
+        env = composer.Environment(task)
+    assert any(
+        r.getMessage().startswith("Physics error in after_compile hooks: Physics state is invalid")
+        for r in caplog.records
+    )
+    ((nbody, random_state),) = task.after_compile_calls
+    assert nbody == env.physics.model.nbody and random_state is env.random_state
+    assert env.reset().first()

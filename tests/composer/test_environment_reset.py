@@ -1,5 +1,7 @@
 """composer.Environment resets: recompiling only when needed, retries, fixed initial states."""
 
+import logging
+
 import numpy as np
 import pytest
 from composer_scene import ReachTask
@@ -217,11 +219,18 @@ def test_without_fixed_initial_state_episodes_start_differently():
     assert not np.array_equal(first, second)
 
 
-def test_reset_retries_after_episode_initialization_error():
+def test_reset_retries_after_episode_initialization_error(caplog):
     task = FailsToInitialize(failures=2)
     env = composer.Environment(task, max_reset_attempts=3)
-    assert env.reset().first()
+    with caplog.at_level(logging.ERROR):
+        assert env.reset().first()
     assert task.attempts == 3
+    assert [r.getMessage() for r in caplog.records if r.levelno == logging.ERROR] == [
+        "Episode initialization failed (attempt 1 of 3): "
+        "EpisodeInitializationError('attempt 1 failed')",
+        "Episode initialization failed (attempt 2 of 3): "
+        "EpisodeInitializationError('attempt 2 failed')",
+    ]
 
 
 def test_reset_raises_once_attempts_are_used_up():

@@ -170,6 +170,65 @@ def test_options_changed_between_episodes_take_effect():
     assert observation["joints_qpos"].shape == (3, 2)
 
 
+def _observation_after_a_step(direct, scene):
+    """Starts an episode, takes one control step and returns what the updater observed."""
+    direct.reset(scene.physics, np.random.RandomState(1))
+    direct.prepare_for_next_control_step()
+    scene.physics.set_control([0.5])
+    for _ in range(_SUB_STEPS):
+        scene.physics.step()
+        direct.update()
+    return direct.get_observation()
+
+
+def _single(obs):
+    obs.enabled = True
+    return {"only": obs}
+
+
+def test_a_corruptor_set_between_episodes_is_applied():
+    # Only the corruptor changes, on the one observable there is.
+    scene = _Scene()
+    observables = _single(observable.MJCFFeature("xpos", scene.tip))
+    direct = _updater(observables)
+    _observation_after_a_step(direct, scene)
+    observables["only"].corruptor = lambda value, random_state: value + 1.0
+    observation = _observation_after_a_step(direct, scene)
+    np.testing.assert_array_equal(observation["only"][0], scene.physics.bind(scene.tip).xpos + 1)
+
+
+def test_an_observable_replaced_between_episodes_is_the_one_read():
+    scene = _Scene()
+    observables = _single(observable.MJCFFeature("qpos", [scene.hinge, scene.slide]))
+    direct = _updater(observables)
+    _observation_after_a_step(direct, scene)
+    observables.update(_single(observable.MJCFFeature("qpos", [scene.slide, scene.slide])))
+    observation = _observation_after_a_step(direct, scene)
+    slide = scene.physics.bind(scene.slide).qpos[0]
+    assert slide != 0
+    np.testing.assert_array_equal(observation["only"], [[slide, slide]])
+
+
+@pytest.mark.parametrize("change", ["enable_one_more", "disable_one"])
+def test_observables_enabled_or_disabled_between_episodes_are_observed_accordingly(change):
+    scene = _Scene()
+    observables = _observables(scene)
+    observables["extra_tip"] = observable.MJCFFeature("xpos", scene.tip)
+    direct = _updater(observables)
+    _observation_after_a_step(direct, scene)
+    if change == "enable_one_more":
+        observables["extra_tip"].enabled = True
+    else:
+        observables["tip"].enabled = False
+    observation = _observation_after_a_step(direct, scene)
+    tip = scene.physics.bind(scene.tip).xpos
+    assert ("extra_tip" in observation) is (change == "enable_one_more")
+    assert ("tip" in observation) is (change == "enable_one_more")
+    for name in ("extra_tip", "tip"):
+        if name in observation:
+            np.testing.assert_array_equal(observation[name][0], tip)
+
+
 def test_later_episodes_observe_as_the_first_does():
     scene = _Scene()
     direct = _updater(_observables(scene))

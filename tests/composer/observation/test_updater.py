@@ -4,6 +4,7 @@ import collections
 import contextlib
 import functools
 import itertools
+import logging
 
 import numpy as np
 import pytest
@@ -472,8 +473,52 @@ def test_bounded_spec_survives_bound_preserving_aggregator_only():
     obs_updater = updater.Updater(observables, 1)
     obs_updater.reset(_Clock(), np.random.RandomState(0))
     spec = obs_updater.observation_spec()
-    assert isinstance(spec["mean"], specs.BoundedArray)
-    assert not isinstance(spec["sum"], specs.BoundedArray)
+    assert spec["mean"] == specs.BoundedArray((), np.float64, -1.0, 1.0, name="mean")
+    assert type(spec["sum"]) is specs.Array
+    assert spec["sum"] == specs.Array((), np.float64, name="sum")
+
+
+class _BoundedPair(observable.Generic):
+    """A float32 pair in [-1, 2] x [0, 3]."""
+
+    @property
+    def array_spec(self):
+        return specs.BoundedArray((2,), np.float32, [-1.0, 0.0], [2.0, 3.0])
+
+
+def _spec_of(obs, name="pair"):
+    obs_updater = updater.Updater({name: _enabled(obs)}, 1)
+    obs_updater.reset(_Clock(), np.random.RandomState(0))
+    return obs_updater.observation_spec()[name]
+
+
+def test_bound_preserving_aggregator_keeps_bounds_dtype_and_name():
+    obs = _BoundedPair(lambda p: np.zeros(2, np.float32), buffer_size=3, aggregator="max")
+    spec = _spec_of(obs)
+    assert spec == specs.BoundedArray((2,), np.float32, [-1.0, 0.0], [2.0, 3.0])
+    assert (spec.dtype, spec.name) == (np.float32, "pair")
+
+
+def test_plain_callable_aggregator_drops_the_bounds_with_a_warning(caplog):
+    obs = _BoundedPair(lambda p: np.zeros(2, np.float32), buffer_size=3, aggregator=np.sum)
+    with caplog.at_level(logging.WARNING):
+        spec = _spec_of(obs)
+    assert type(spec) is specs.Array
+    # np.sum over a float32 buffer keeps float32 and sums the whole buffer.
+    assert spec == specs.Array((), np.float32, name="pair")
+    assert [r.getMessage() for r in caplog.records] == [
+        "Observable 'pair': dropping the bounds of its spec because its aggregator has no "
+        "true `preserves_bounds` attribute."
+    ]
+
+
+def test_aggregated_spec_of_an_unspecified_observable_has_the_aggregated_dtype_and_name():
+    obs = _enabled(
+        observable.Generic(lambda p: np.zeros(3, np.float32), buffer_size=2, aggregator="min")
+    )
+    spec = _spec_of(obs, "low")
+    assert spec == specs.Array((3,), np.float32)
+    assert (spec.dtype, spec.name) == (np.float32, "low")
 
 
 def test_observable_spec_subclass_is_kept_with_buffered_shape_and_name():
@@ -550,6 +595,16 @@ def test_list_of_dicts_gives_observations_in_the_same_structure():
     assert [list(d) for d in observations[-1]] == [["a"], ["b"]]
 
 
+def test_list_of_dicts_gives_specs_in_the_same_structure():
+    observables = [collections.OrderedDict(a=_scalar()), dict(b=_vector())]
+    obs_updater = updater.Updater(observables, 1)
+    obs_updater.reset(_Clock(), np.random.RandomState(0))
+    spec = obs_updater.observation_spec()
+    assert type(spec) is list
+    assert [type(d) for d in spec] == [collections.OrderedDict, dict]
+    assert [(name, s.shape) for d in spec for name, s in d.items()] == [("a", (1,)), ("b", (1, 2))]
+
+
 def test_observables_that_are_not_dicts_are_rejected():
     with pytest.raises(ValueError, match="dict"):
         updater.Updater([_scalar()], 1)
@@ -562,12 +617,14 @@ def test_observables_that_are_not_dicts_are_rejected():
         lambda u: u.observation_spec(),
         lambda u: u.prepare_for_next_control_step(),
         lambda u: u.update(),
+        lambda u: u.finish_control_step(),
     ],
-    ids=["get_observation", "observation_spec", "prepare", "update"],
+    ids=["get_observation", "observation_spec", "prepare", "update", "finish"],
 )
 def test_use_before_reset_raises(call):
-    with pytest.raises(RuntimeError, match="reset"):
+    with pytest.raises(RuntimeError) as raised:
         call(updater.Updater({"a": _scalar()}, 1))
+    assert str(raised.value) == "Updater: call reset(physics, random_state) first"
 
 
 def test_reset_restarts_the_schedule_and_buffers():
