@@ -13,7 +13,7 @@ def _check_element(obj, owner: str) -> None:
 
 
 def _check_elements(obj, owner: str) -> None:
-    if isinstance(obj, Iterable):
+    if isinstance(obj, Iterable) and not isinstance(obj, str):
         for element in obj:
             _check_element(element, owner)
     else:

@@ -276,3 +276,105 @@ def test_view_source_is_none_for_memory_numpy_owns_and_for_non_arrays(value):
 def test_view_source_of_a_copy_is_none():
     physics = _Scene().physics
     assert base.view_source(physics.data.ptr.xpos[1].copy()) is None
+
+
+class _CountedFeature(observable.MJCFFeature):
+    """An MJCFFeature that counts the calls of its observation callable."""
+
+    def __init__(self, *args, **kwargs):
+        super().__init__(*args, **kwargs)
+        self.calls = 0
+
+    def _callable(self, physics):
+        read = super()._callable(physics)
+
+        def counted():
+            self.calls += 1
+            return read()
+
+        return counted
+
+
+class _ClockWithWriter(observable.Observable):
+    """Physics time, with a writer; counts the calls of its observation callable."""
+
+    def __init__(self):
+        super().__init__(1, None, None, None, None)
+        self.calls = 0
+
+    def _callable(self, physics):
+        def read():
+            self.calls += 1
+            return np.array([physics.data.time])
+
+        return read
+
+    def _writer(self, physics, out):
+        def write():
+            out[0] = physics.data.time
+
+        return write
+
+
+def test_observables_read_from_mujoco_memory_or_written_are_sampled_without_calls():
+    # A gathered live source and an observable with a writer: neither is called while
+    # stepping, and both observe what the physics holds.
+    scene = _Scene()
+    feature = _CountedFeature("qpos", [scene.hinge, scene.slide])
+    clock = _ClockWithWriter()
+    observables = {"feature": feature, "clock": clock}
+    for obs in observables.values():
+        obs.enabled = True
+    direct = _updater(observables)
+    direct.reset(scene.physics, np.random.RandomState(1))
+    calls_at_reset = feature.calls, clock.calls
+    for _ in range(3):
+        direct.prepare_for_next_control_step()
+        scene.physics.set_control([0.5])
+        for _ in range(_SUB_STEPS):
+            scene.physics.step()
+            direct.update()
+    observation = direct.get_observation()
+    assert (feature.calls, clock.calls) == calls_at_reset
+    qpos = scene.physics.bind([scene.hinge, scene.slide]).qpos
+    assert qpos[0] != 0
+    np.testing.assert_array_equal(observation["feature"], [qpos])
+    np.testing.assert_array_equal(observation["clock"], [[scene.physics.data.time]])
+
+
+def test_features_of_two_arrays_of_one_size_read_each_its_own_array():
+    # qpos and qvel of a single hinge are both one float64: gathered from different arrays.
+    model = mjcf.RootElement()
+    body = model.worldbody.add("body")
+    hinge = body.add("joint", type="hinge", axis=[0, 1, 0])
+    body.add("geom", type="capsule", fromto=[0, 0, 0, 0.3, 0, 0], size=[0.03])
+    physics = mjcf.Physics.from_mjcf_model(model)
+    observables = {
+        "qpos": observable.MJCFFeature("qpos", hinge),
+        "qvel": observable.MJCFFeature("qvel", hinge),
+    }
+    for obs in observables.values():
+        obs.enabled = True
+    direct = updater.Updater(observables, 2)
+    direct.reset(physics, np.random.RandomState(1))
+    direct.prepare_for_next_control_step()
+    physics.bind(hinge).qvel = 1.5
+    physics.forward()
+    for _ in range(2):
+        physics.step()
+        direct.update()
+    observation = direct.get_observation()
+    np.testing.assert_array_equal(observation["qpos"], [physics.bind(hinge).qpos])
+    np.testing.assert_array_equal(observation["qvel"], [physics.bind(hinge).qvel])
+    assert observation["qpos"][0] != observation["qvel"][0]
+
+
+def test_an_integer_model_field_is_observed_with_its_dtype():
+    scene = _Scene()
+    geom = scene.model.find_all("geom")[0]
+    obs = observable.MJCFFeature("contype", geom)
+    obs.enabled = True
+    direct = _updater({"contype": obs})
+    observation = _observation_after_a_step(direct, scene)["contype"]
+    assert observation.dtype == scene.physics.bind(geom).contype.dtype == np.int32
+    np.testing.assert_array_equal(observation, [1])

@@ -181,6 +181,29 @@ def test_latest_sample_buffer_rejects_storage_of_another_shape():
         LatestSampleBuffer((3,), np.float64, storage=np.zeros(3))
 
 
+def test_latest_sample_buffer_rejects_storage_that_is_not_contiguous():
+    with pytest.raises(ValueError, match="C-contiguous"):
+        LatestSampleBuffer((3,), np.float64, storage=np.zeros((1, 6))[:, ::2])
+
+
+def test_latest_sample_buffer_rejects_a_float_array_for_integer_samples():
+    buffer = LatestSampleBuffer((2,), np.int32)
+    with pytest.raises(ValueError, match="dtype float64"):
+        buffer.insert(0, 0, np.array([0.5, 1.5]))
+
+
+def test_latest_sample_buffer_refuses_a_delay_naming_it():
+    with pytest.raises(ValueError) as raised:
+        LatestSampleBuffer((), np.float64).insert(0, 2, 1.0)
+    assert str(raised.value) == "LatestSampleBuffer: delay must be 0, got 2"
+
+
+def test_a_sample_shape_may_be_given_as_an_integer():
+    buffer = Buffer(2, 3, np.float64)
+    buffer.insert(0, 0, [1.0, 2.0, 3.0])
+    assert buffer.read(0).tolist() == [[0.0, 0.0, 0.0], [1.0, 2.0, 3.0]]
+
+
 def _expected_read(inserted, size, read_time):
     """The last `size` samples delivered by `read_time`, oldest first, zero-padded in front:
     delivery order is arrival time, then insertion order."""

@@ -291,10 +291,12 @@ def _options_of(obs):
     return (obs.update_interval, obs.buffer_size, obs.delay, obs.aggregator, obs.corruptor)
 
 
-@pytest.mark.parametrize("kind", ["mujoco_feature", "mjcf_camera", "mujoco_camera"])
+@pytest.mark.parametrize("kind", ["mjcf_feature", "mujoco_feature", "mjcf_camera", "mujoco_camera"])
 def test_constructor_options_are_kept(scene, kind):
     options = dict(update_interval=3, buffer_size=4, delay=2, aggregator="max", corruptor=_double)
-    if kind == "mujoco_feature":
+    if kind == "mjcf_feature":
+        obs = observable.MJCFFeature("qpos", scene.hinge, **options)
+    elif kind == "mujoco_feature":
         obs = observable.MujocoFeature("qpos", "hinge", **options)
     elif kind == "mjcf_camera":
         obs = observable.MJCFCamera(scene.camera, height=8, width=12, **options)
@@ -348,3 +350,27 @@ def test_a_one_pixel_camera_is_allowed_and_zero_is_not(scene):
     assert pixel(scene.physics).shape == (1, 1, 3)
     with pytest.raises(ValueError, match="option 'height' must be an integer >= 1; got 0"):
         observable.MujocoCamera("top", height=0, width=1)
+
+
+@pytest.mark.parametrize("elements", ["hinge", ["hinge"]], ids=["one", "list"])
+def test_mjcf_feature_error_for_a_non_element_names_the_feature(elements):
+    with pytest.raises(ValueError) as raised:
+        observable.MJCFFeature("qpos", elements)
+    assert str(raised.value) == "MJCFFeature('qpos'): expected an mjcf.Element, got str: 'hinge'"
+
+
+def test_unknown_aggregator_name_is_a_key_error_listing_the_names():
+    with pytest.raises(KeyError) as raised:
+        observable.Generic(lambda physics: 0, aggregator="average")
+    assert "unknown name 'average'; expected one of ['max', 'mean', 'median', 'min', 'sum']" in str(
+        raised.value
+    )
+
+
+def test_aggregator_that_is_not_a_name_or_callable_is_a_type_error_saying_what_is_allowed():
+    with pytest.raises(TypeError) as raised:
+        observable.Generic(lambda physics: 0, aggregator=3)
+    assert "aggregator: expected a name from ['max', 'mean', 'median', 'min', 'sum'], a " in str(
+        raised.value
+    )
+    assert str(raised.value).endswith("a callable or None, got 3")

@@ -419,13 +419,58 @@ def test_sample_of_changed_shape_is_an_error_naming_observable():
 
 
 def test_strip_singleton_buffer_dim_removes_the_axis_of_size_one_buffers():
-    observables = {"one": _vector(), "two": _vector(buffer_size=2)}
+    observables = {"one": _vector(), "two": _vector(buffer_size=2), "late": _vector(delay=2)}
     obs_updater = updater.Updater(observables, 1, strip_singleton_buffer_dim=True)
     obs_updater.reset(_Clock(), np.random.RandomState(0))
     spec = obs_updater.observation_spec()
     assert spec["one"].shape == (2,)
     assert spec["two"].shape == (2, 2)
+    assert spec["late"].shape == (2,)
     assert obs_updater.get_observation()["one"].shape == (2,)
+    assert obs_updater.get_observation()["late"].shape == (2,)
+
+
+def test_delayed_observations_are_zero_padded_by_default():
+    late = _enabled(observable.Generic(lambda physics: physics.time + 5.0, delay=3))
+    obs_updater = updater.Updater({"late": late})
+    obs_updater.reset(_Clock(), np.random.RandomState(0))
+    assert obs_updater.get_observation()["late"].tolist() == [0.0]
+    assert obs_updater.sample_steps == ()
+
+
+@pytest.mark.parametrize(
+    ("observables", "steps", "message"),
+    [
+        (
+            [{"a": None}, 3],
+            1,
+            "Updater: observables must be a dict of observables or a list/tuple of such "
+            "dicts, got list",
+        ),
+        (
+            {},
+            0,
+            "observable '<updater>': option 'physics_steps_per_control_step' produced 0; "
+            "expected an integer >= 1",
+        ),
+    ],
+    ids=["list_of_non_dicts", "zero_steps"],
+)
+def test_bad_updater_arguments_are_named_in_full(observables, steps, message):
+    with pytest.raises(ValueError) as raised:
+        updater.Updater(observables, steps)
+    assert str(raised.value) == message
+
+
+@pytest.mark.parametrize(("value", "shown"), [(2.5, "2.5"), ("3", "'3'")])
+def test_random_interval_that_is_not_an_integer_is_an_error_naming_it(value, shown):
+    obs_updater = updater.Updater({"arm/pos": _scalar(update_interval=lambda: value)}, 2)
+    obs_updater.reset(_Clock(), np.random.RandomState(0))
+    with pytest.raises(ValueError) as raised:
+        obs_updater.prepare_for_next_control_step()
+    assert str(raised.value) == (
+        f"observable 'arm/pos': option 'update_interval' produced {shown}; expected an integer >= 1"
+    )
 
 
 def test_spec_keeps_the_buffer_axis_by_default():
