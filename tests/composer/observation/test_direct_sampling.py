@@ -273,6 +273,28 @@ def test_view_source_is_none_for_memory_numpy_owns_and_for_non_arrays(value):
     assert base.view_source(value) is None
 
 
+def _foreign_floats(size):
+    """A float64 array over memory NumPy does not own, as MuJoCo's arrays are."""
+    return np.frombuffer(bytearray(8 * size), np.float64)
+
+
+def test_view_source_of_a_reinterpreted_view_is_none():
+    assert base.view_source(_foreign_floats(4).view(np.int64)) is None
+
+
+def test_view_source_of_a_view_between_elements_is_none():
+    root = _foreign_floats(4)
+    straddling = np.ndarray((2,), np.float64, buffer=root, offset=4)
+    assert base.view_source(straddling) is None
+
+
+def test_view_source_of_foreign_memory_gives_its_element_indices():
+    root = _foreign_floats(6)
+    flat, indices = base.view_source(root.reshape(2, 3)[:, 1:])
+    assert flat.shape == (6,)
+    assert indices.tolist() == [[1, 2], [4, 5]]
+
+
 def test_view_source_of_a_copy_is_none():
     physics = _Scene().physics
     assert base.view_source(physics.data.ptr.xpos[1].copy()) is None
@@ -321,13 +343,14 @@ def test_observables_read_from_mujoco_memory_or_written_are_sampled_without_call
     # stepping, and both observe what the physics holds.
     scene = _Scene()
     feature = _CountedFeature("qpos", [scene.hinge, scene.slide])
+    bodies = _CountedFeature("xpos", [scene.model.find("body", "arm"), scene.ball])
     clock = _ClockWithWriter()
-    observables = {"feature": feature, "clock": clock}
+    observables = {"feature": feature, "bodies": bodies, "clock": clock}
     for obs in observables.values():
         obs.enabled = True
     direct = _updater(observables)
     direct.reset(scene.physics, np.random.RandomState(1))
-    calls_at_reset = feature.calls, clock.calls
+    calls_at_reset = feature.calls, bodies.calls, clock.calls
     for _ in range(3):
         direct.prepare_for_next_control_step()
         scene.physics.set_control([0.5])
@@ -335,11 +358,15 @@ def test_observables_read_from_mujoco_memory_or_written_are_sampled_without_call
             scene.physics.step()
             direct.update()
     observation = direct.get_observation()
-    assert (feature.calls, clock.calls) == calls_at_reset
+    assert (feature.calls, bodies.calls, clock.calls) == calls_at_reset
     qpos = scene.physics.bind([scene.hinge, scene.slide]).qpos
     assert qpos[0] != 0
     np.testing.assert_array_equal(observation["feature"], [qpos])
     np.testing.assert_array_equal(observation["clock"], [[scene.physics.data.time]])
+    np.testing.assert_array_equal(
+        observation["bodies"],
+        [scene.physics.bind([scene.model.find("body", "arm"), scene.ball]).xpos],
+    )
 
 
 def test_features_of_two_arrays_of_one_size_read_each_its_own_array():

@@ -418,6 +418,23 @@ def test_sample_of_changed_shape_is_an_error_naming_observable():
         obs_updater.update()
 
 
+def test_first_sample_of_another_shape_than_the_probe_is_an_error_naming_observable():
+    # Reset reads the value once for its shape and once as the episode's first sample.
+    sizes = iter([3, 4])
+    obs = _enabled(observable.Generic(lambda p: np.zeros(next(sizes))))
+    obs_updater = updater.Updater({"arm/joints": obs}, 1)
+    with pytest.raises(ValueError) as raised:
+        obs_updater.reset(_Clock(), np.random.RandomState(0))
+    assert str(raised.value) == (
+        "observable 'arm/joints': sample has shape (4,), expected (3,) (dtype float64)"
+    )
+
+
+def test_update_interval_none_means_every_step():
+    observations = _run({"t": _scalar(update_interval=None)}, 2, 2)
+    assert [o["t"].tolist() for o in observations] == [[0.0], [2.0], [4.0]]
+
+
 def test_strip_singleton_buffer_dim_removes_the_axis_of_size_one_buffers():
     observables = {"one": _vector(), "two": _vector(buffer_size=2), "late": _vector(delay=2)}
     obs_updater = updater.Updater(observables, 1, strip_singleton_buffer_dim=True)
