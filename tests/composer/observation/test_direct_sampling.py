@@ -405,3 +405,92 @@ def test_an_integer_model_field_is_observed_with_its_dtype():
     observation = _observation_after_a_step(direct, scene)["contype"]
     assert observation.dtype == scene.physics.bind(geom).contype.dtype == np.int32
     np.testing.assert_array_equal(observation, [1])
+
+
+class _TimeWithSource(observable.Observable):
+    """Physics time as a (1,) array; `source(physics)` is what `_live_source` returns."""
+
+    def __init__(self, source):
+        super().__init__(1, None, None, None, None)
+        self._source = source
+
+    def _callable(self, physics):
+        return lambda: np.array([physics.data.time])
+
+    def _live_source(self, physics):
+        return self._source(physics)
+
+
+@pytest.mark.parametrize(
+    "source",
+    [
+        lambda physics: (np.zeros((1, 1)), np.array([0])),
+        lambda physics: (np.zeros(1, np.float32), np.array([0])),
+        lambda physics: (np.zeros(3), np.array([0, 1])),
+        lambda physics: (np.zeros(3), np.array([0.0])),
+        lambda physics: (np.zeros(3), np.array([3])),
+        lambda physics: (np.zeros(3), np.array([-1])),
+        lambda physics: ([0.0], np.array([0])),
+    ],
+    ids=["2d_array", "other_dtype", "other_shape", "float_indices", "past_end", "negative", "list"],
+)
+def test_an_unusable_live_source_is_ignored_and_the_observable_called(source):
+    # The source arrays hold zeros; the observable's value, the physics time, is not zero.
+    scene = _Scene()
+    direct = _updater(_single(_TimeWithSource(source)))
+    observation = _observation_after_a_step(direct, scene)
+    assert observation["only"].tolist() == [[scene.physics.data.time]]
+
+
+def test_a_live_source_of_integers_is_gathered_with_its_dtype():
+    scene = _Scene()
+    foreign = np.frombuffer(bytearray(12), np.int32)
+
+    class Counter(observable.Observable):
+        def _callable(self, physics):
+            return lambda: foreign[1:2].copy()
+
+        def _live_source(self, physics):
+            return foreign, np.array([1])
+
+    obs = Counter(1, None, None, None, None)
+    obs.enabled = True
+    direct = _updater({"count": obs})
+    direct.reset(scene.physics, np.random.RandomState(1))
+    direct.prepare_for_next_control_step()
+    foreign[1] = 7
+    for _ in range(_SUB_STEPS):
+        scene.physics.step()
+        direct.update()
+    observation = direct.get_observation()["count"]
+    assert observation.dtype == np.int32
+    assert observation.tolist() == [[7]]
+
+
+def test_an_update_interval_changed_between_episodes_changes_when_it_samples():
+    # Two features of one array share a gather while their intervals agree. Once one samples
+    # every 2nd sub-step, after 5 sub-steps it shows the value of sub-step 4.
+    scene = _Scene()
+    observables = {
+        "hinge": observable.MJCFFeature("qpos", scene.hinge),
+        "slide": observable.MJCFFeature("qpos", scene.slide),
+    }
+    for obs in observables.values():
+        obs.enabled = True
+    direct = _updater(observables)
+    _observation_after_a_step(direct, scene)
+    observables["slide"].update_interval = 2
+    direct.reset(scene.physics, np.random.RandomState(1))
+    direct.prepare_for_next_control_step()
+    scene.physics.set_control([0.5])
+    scene.physics.bind(scene.slide).qvel = 1.0
+    scene.physics.forward()
+    slides = []
+    for _ in range(_SUB_STEPS):
+        scene.physics.step()
+        slides.append(scene.physics.bind(scene.slide).qpos[0])
+        direct.update()
+    observation = direct.get_observation()
+    assert slides[3] != slides[4]
+    assert observation["slide"].tolist() == [[slides[3]]]
+    assert observation["hinge"].tolist() == [[scene.physics.bind(scene.hinge).qpos[0]]]

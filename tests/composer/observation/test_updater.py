@@ -729,3 +729,15 @@ def test_cycle_of_interval_values_is_followed_in_order():
     obs = _scalar(update_interval=lambda: next(cycle), buffer_size=4)
     observations = _run({"t": obs}, 6, 1)
     assert list(observations[-1]["t"]) == [0.0, 1.0, 3.0, 6.0]
+
+
+def test_an_observables_array_spec_sets_the_observation_dtype():
+    class Float32Spec(observable.Generic):
+        @property
+        def array_spec(self):
+            return specs.Array((1,), np.float32)
+
+    obs = _enabled(Float32Spec(lambda physics: np.array([physics.time + 0.1])))
+    observations = _run({"t": obs}, 2, 1)
+    assert [o["t"].dtype for o in observations] == [np.float32, np.float32]
+    assert observations[-1]["t"].tolist() == [[np.float32(2.1)]]
