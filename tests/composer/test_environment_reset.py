@@ -7,7 +7,6 @@ import pytest
 from composer_scene import ReachTask
 
 import composer
-from composer.observation import observable
 
 
 class HeavierEveryStep(ReachTask):
@@ -296,29 +295,3 @@ def test_entity_hook_replaced_between_episodes_runs_from_the_next_reset():
     env.reset()
     env.step(np.zeros(env.action_spec().shape))
     assert calls == [pytest.approx(0.02)]
-
-
-class ResizingTaskWithExtraObservables(ResizingTask):
-    """The resizing task, whose task observables the test adds to between episodes."""
-
-    def __init__(self):
-        super().__init__()
-        self.extra = {}
-
-    @property
-    def task_observables(self):
-        return dict(self.extra)
-
-
-def test_observable_added_between_episodes_is_observed_after_a_parameter_only_recompile():
-    task = ResizingTaskWithExtraObservables()
-    env = composer.Environment(task)
-    physics = env.physics
-    env.reset()
-    extra = observable.Generic(lambda physics: np.array([7.0]))
-    extra.enabled = True
-    task.extra["seven"] = extra
-    observation = env.reset().observation
-    assert env.physics == physics
-    np.testing.assert_array_equal(observation["seven"], [[7.0]])
-    assert "seven" in env.observation_spec()

@@ -56,6 +56,7 @@ def test_an_observable_added_between_episodes_is_observed_from_the_next_reset(ch
     task.extra["seven"] = _constant(7.0)
     change_model(task)
     assert env.reset().observation["seven"].tolist() == [[7.0]]
+    assert "seven" in env.observation_spec()
     assert env.step(np.zeros(2)).observation["seven"].tolist() == [[7.0]]
 
 
