@@ -161,6 +161,19 @@ def test_step_in_one_chunk_equals_single_steps(integrator, legacy_step):
     np.testing.assert_array_equal(chunked.data.xpos, single.data.xpos)
 
 
+@pytest.mark.parametrize("nstep", [2, 3])
+def test_legacy_step_of_a_few_steps_advances_exactly_that_many(physics, nstep):
+    model = physics.model.ptr
+    reference = mujoco.MjData(model)
+    reference.qvel[:] = physics.data.qvel[:] = 0.5
+    physics.forward()  # a legacy step continues from the last forward pass
+    mujoco.mj_step(model, reference, nstep)
+    physics.step(nstep)
+    assert physics.time() == reference.time
+    np.testing.assert_array_equal(physics.data.qpos, reference.qpos)
+    np.testing.assert_array_equal(physics.data.qvel, reference.qvel)
+
+
 def test_step_advances_time_by_nstep_timesteps(physics):
     physics.step(4)
     assert physics.time() == pytest.approx(4 * 0.005)
@@ -174,6 +187,17 @@ def test_forward_updates_positions_after_a_qpos_write(physics):
     physics.data.qpos[:3] = [2, 3, 4]
     physics.forward()
     np.testing.assert_array_equal(physics.data.xpos[_body_id(physics, "ball_body")], [2, 3, 4])
+
+
+def test_mark_as_dirty_makes_bindings_recompute_positions():
+    root = mjcf.from_xml_string(_xml())
+    physics = Physics.from_mjcf_model(root)
+    ball_body = root.find("body", "ball_body")
+    np.testing.assert_array_equal(physics.bind(ball_body).xpos, [0, 0, 1])
+    physics.data.qpos[:3] = [4, 5, 6]  # a direct write: the binding cannot see it
+    physics.mark_as_dirty()
+    assert physics.is_dirty is True
+    np.testing.assert_array_equal(physics.bind(ball_body).xpos, [4, 5, 6])
 
 
 def test_reset_restores_the_initial_state(physics):
@@ -197,6 +221,12 @@ def test_reset_runs_forward_without_actuation(physics):
 def test_reset_rejects_a_missing_keyframe(physics):
     with pytest.raises(ValueError, match="keyframe_id 3"):
         physics.reset(keyframe_id=3)
+
+
+def test_reset_rejects_the_keyframe_id_one_past_the_last(physics):
+    with pytest.raises(ValueError) as raised:
+        physics.reset(keyframe_id=1)  # the model has one keyframe, id 0
+    assert str(raised.value) == "keyframe_id 1 is out of range: the model has 1 keyframe(s)"
 
 
 def test_reset_context_keeps_the_state_set_inside_and_updates_positions(physics):
@@ -283,8 +313,20 @@ def test_set_state_restores_a_saved_state(physics):
 
 
 def test_set_state_rejects_a_wrong_size(physics):
-    with pytest.raises(ValueError, match=r"expected \(23,\)"):
+    with pytest.raises(ValueError) as raised:
         physics.set_state(np.zeros(5))
+    assert str(raised.value) == (
+        "physics_state has shape (5,); expected (23,) (qpos, qvel, act, ...)"
+    )
+
+
+def test_set_state_accepts_a_list_of_ints(physics):
+    state = [0] * 23
+    state[2] = 3  # ball height (qpos)
+    state[12] = 2  # ball x velocity (qvel)
+    physics.set_state(state)
+    np.testing.assert_array_equal(physics.data.qpos[:4], [0, 0, 3, 0])
+    assert physics.data.qvel[0] == 2.0
 
 
 def test_copy_starts_from_the_same_state(physics):
