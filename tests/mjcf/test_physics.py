@@ -399,8 +399,27 @@ def test_unpickled_physics_keeps_legacy_step_off(physics):
 
 def test_free_makes_the_physics_unusable(physics):
     physics.free()
-    with pytest.raises(AttributeError):
+    with pytest.raises(AttributeError, match="was freed"):
         physics.step()
+
+
+def test_free_drops_named_indexing_and_bindings_with_a_clear_error():
+    root = mjcf.from_xml_string(_xml())
+    physics = Physics.from_mjcf_model(root)
+    geoms = root.find_all("geom")
+    _ = physics.named.data.qpos, physics.bind(geoms).xpos
+    physics.free()
+    with pytest.raises(AttributeError, match="^this Physics was freed"):
+        _ = physics.named
+    with pytest.raises(AttributeError, match="^this Physics was freed"):
+        physics.bind(geoms[:2])
+    with pytest.raises(AttributeError, match="^this Physics was freed"):
+        physics.bind(geoms[0])
+
+
+def test_a_missing_attribute_of_a_live_physics_is_named(physics):
+    with pytest.raises(AttributeError, match="^'Physics' object has no attribute 'colour'$"):
+        _ = physics.colour
 
 
 def _arm_model():

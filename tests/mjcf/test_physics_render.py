@@ -108,3 +108,11 @@ def test_image_larger_than_the_offscreen_buffer_is_an_error(physics):
 def test_overlays_are_rejected(physics):
     with pytest.raises(ValueError, match="overlays"):
         physics.render(overlays=["text"])
+
+
+def test_render_after_free_is_a_clear_error():
+    physics = Physics.from_xml_string(_XML)
+    physics.render(height=8, width=8)
+    physics.free()
+    with pytest.raises(AttributeError, match="^this Physics was freed"):
+        physics.render(height=8, width=8)
