@@ -641,8 +641,11 @@ def test_element_of_a_same_named_model_error_explains_copies(scene):
     stranger = twin.worldbody.add("geom", name="ball", size=[1])
     with pytest.raises(ValueError) as raised:
         scene.physics.bind(stranger)
-    assert "('scene'), not to the model compiled into this Physics ('scene'); they are" in str(
-        raised.value
+    assert str(raised.value) == (
+        "cannot bind <geom name='ball'>: it belongs to another model ('scene'), not to the "
+        "model compiled into this Physics ('scene'); they are different objects of the same "
+        "name (a copy made by pickling or copy.deepcopy binds its own elements, not the "
+        "original's)"
     )
 
 
@@ -654,3 +657,122 @@ def test_element_outside_any_model_error_calls_its_model_unnamed(scene):
         "cannot bind <geom name='ball'>: it belongs to another model ('unnamed model'), not to "
         "the model compiled into this Physics ('scene')"
     )
+
+
+def test_element_added_after_compiling_error_in_full(scene):
+    late = scene.root.worldbody.add("geom", name="late", size=[1])
+    with pytest.raises(ValueError) as raised:
+        scene.physics.bind(late)
+    assert str(raised.value) == (
+        "cannot bind <geom name='late'>: the model compiled into this Physics has no geom "
+        "named 'late'"
+    )
+
+
+def test_element_without_a_compiled_object_error_in_full(scene):
+    with pytest.raises(ValueError) as raised:
+        scene.physics.bind(scene.root.compiler)
+    assert str(raised.value) == (
+        "cannot bind <compiler>: <compiler> elements are not compiled into a MuJoCo object"
+    )
+
+
+def test_frame_element_error_says_it_has_no_fields():
+    root = mjcf.RootElement()
+    frame = root.worldbody.add("frame", name="offset")
+    frame.add("geom", size=[1])
+    physics = Physics.from_mjcf_model(root)
+    with pytest.raises(ValueError) as raised:
+        physics.bind(frame)
+    assert str(raised.value) == "cannot bind <frame name='offset'>: no MuJoCo fields for 'frame'"
+
+
+def test_non_element_in_a_list_error_names_its_type(scene):
+    with pytest.raises(ValueError) as raised:
+        scene.physics.bind([scene.ball, 5])
+    assert str(raised.value) == "bind expects mjcf elements; item 1 is a int"
+
+
+def test_describe_names_a_non_element_by_its_type():
+    from mjcf.binding import describe
+
+    assert describe(object()) == "<object>"
+
+
+@pytest.mark.parametrize(
+    "elements, expected",
+    [
+        (lambda scene: scene.ball, "Binding(<geom name='ball'>)"),
+        (lambda scene: [scene.ball], "Binding([<geom name='ball'>])"),
+        (lambda scene: [scene.ball, scene.upper], "Binding([2 geom elements])"),
+    ],
+)
+def test_binding_repr_describes_its_elements(scene, elements, expected):
+    assert repr(scene.physics.bind(elements(scene))) == expected
+
+
+def test_unknown_attribute_without_close_names_says_only_that(scene):
+    with pytest.raises(AttributeError) as raised:
+        _ = scene.physics.bind(scene.ball).zzzz
+    assert str(raised.value) == "<geom name='ball'> has no attribute 'zzzz'"
+
+
+def test_unknown_attribute_suggests_at_most_three_names(scene):
+    with pytest.raises(AttributeError) as raised:
+        _ = scene.physics.bind(scene.arm).poss  # pos, xpos, ipos and xipos are all close
+    assert str(raised.value) == (
+        "<body name='arm'> has no attribute 'poss'; did you mean pos, xpos, ipos?"
+    )
+
+
+def test_attribute_of_a_newer_mujoco_names_the_release(scene, monkeypatch):
+    from mjcf import mujoco_compat
+
+    monkeypatch.setitem(mujoco_compat.BINDING_SINCE, "geom.sparkle", "99.0.0")
+    with pytest.raises(AttributeError) as raised:
+        _ = scene.physics.bind(scene.ball).sparkle
+    assert str(raised.value) == (
+        "<geom name='ball'> has no attribute 'sparkle': geom attribute 'sparkle' needs "
+        f"mujoco>=99.0.0 (installed: mujoco {mujoco.__version__})"
+    )
+
+
+def test_item_write_to_a_scattered_derived_field_is_kept_until_forward(scene):
+    physics = scene.physics
+    bodies = [scene.forearm, scene.ball_body]
+    physics.bind(bodies).xpos[1, 2] = 7.0
+    assert not physics.is_dirty
+    assert physics.bind(bodies).xpos[1, 2] == 7.0
+    physics.forward()
+    assert physics.bind(bodies).xpos[1, 2] == 1.0
+
+
+def test_scattered_model_field_reads_see_writes_made_elsewhere(scene):
+    physics = scene.physics
+    geoms = [scene.lower, scene.ball]
+    np.testing.assert_array_equal(physics.bind(geoms).rgba[1], [1, 0, 0, 1])
+    physics.named.model.geom_rgba["ball"] = [0, 0, 1, 1]
+    np.testing.assert_array_equal(physics.bind(geoms).rgba[1], [0, 0, 1, 1])
+
+
+def test_two_mocap_bodies_bind_together():
+    root = mjcf.RootElement()
+    targets = [
+        root.worldbody.add("body", name=name, mocap=True, pos=[index, 0, 0])
+        for index, name in enumerate(["first", "second"])
+    ]
+    physics = Physics.from_mjcf_model(root)
+    bound = physics.bind(targets)
+    np.testing.assert_array_equal(bound.mocap_pos, [[0, 0, 0], [1, 0, 0]])
+    bound.mocap_pos[1] = [1, 2, 3]
+    physics.forward()
+    np.testing.assert_array_equal(physics.data.xpos[2], [1, 2, 3])
+
+
+def test_worldbody_of_an_attached_model_binds_the_world_in_a_physics_of_its_own_xml():
+    scene = mjcf.RootElement(model="scene")
+    arm = mjcf.RootElement(model="arm")
+    arm.worldbody.add("body", name="link", pos=[0, 0, 1]).add("geom", size=[0.1])
+    scene.worldbody.add("site", name="mount", pos=[3, 0, 0]).attach(arm)
+    physics = Physics.from_xml_string(arm.to_xml_string())  # knows no MJCF model
+    assert physics.bind(arm.worldbody).element_id == 0
