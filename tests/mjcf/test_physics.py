@@ -469,5 +469,49 @@ def test_mujoco_warnings_go_to_logging_not_to_a_log_file(tmp_path, monkeypatch, 
     physics.data.qvel[:] = np.nan
     with caplog.at_level("WARNING"), physics.suppress_physics_errors():
         physics.step()
-    assert "MuJoCo warning" in caplog.text
+    assert "MuJoCo warning: Nan, Inf or huge value in Q" in caplog.text
     assert not (tmp_path / "MUJOCO_LOG.TXT").exists()
+
+
+def test_warnings_raised_together_are_all_named():
+    physics = Physics.from_xml_string(_xml())
+    with pytest.raises(PhysicsError) as raised:
+        with physics.check_invalid_state():
+            physics.data.qpos[0] = np.nan
+            mujoco.mj_step(physics.model.ptr, physics.data.ptr)  # resets the data
+            physics.data.ctrl[0] = np.nan
+            mujoco.mj_step(physics.model.ptr, physics.data.ptr)  # zeroes the control
+    assert str(raised.value) == (
+        "Physics state is invalid. Warning(s) raised: mjWARN_BADQPOS, mjWARN_BADCTRL"
+    )
+
+
+def test_constructor_accepts_a_data_wrapper(physics):
+    physics.step(3)
+    twin = Physics(physics.data)
+    assert twin.data.ptr is physics.data.ptr
+    assert twin.time() == pytest.approx(3 * 0.005)
+
+
+def test_from_model_accepts_a_model_wrapper(physics):
+    assert Physics.from_model(physics.model).model.ptr is physics.model.ptr
+
+
+def test_bind_none_error_in_full(physics):
+    with pytest.raises(ValueError) as raised:
+        physics.bind(None)
+    assert str(raised.value) == "bind expects an mjcf element or a sequence of them, got None"
+
+
+def test_bind_of_a_non_sequence_error_names_its_type(physics):
+    with pytest.raises(ValueError) as raised:
+        physics.bind(5)
+    assert str(raised.value) == "bind expects an mjcf element or a sequence of them, got int"
+
+
+def test_binding_a_generator_after_a_list_returns_the_cached_binding():
+    root = mjcf.from_xml_string(_xml())
+    physics = Physics.from_mjcf_model(root)
+    geoms = root.find_all("geom")[:2]
+    first = physics.bind(geoms)
+    assert physics.bind(geom for geom in geoms) is first

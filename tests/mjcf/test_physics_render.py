@@ -116,3 +116,11 @@ def test_render_after_free_is_a_clear_error():
     physics.free()
     with pytest.raises(AttributeError, match="^this Physics was freed"):
         physics.render(height=8, width=8)
+
+
+def test_scene_option_hiding_geom_group_0_hides_the_box(physics):
+    option = mujoco.MjvOption()
+    option.geomgroup[0] = 0
+    image = physics.render(height=60, width=80, camera_id="front", scene_option=option)
+    red, green, blue = image[30, 40].astype(int)
+    assert not (red > 100 and red > 2 * green and red > 2 * blue)
