@@ -469,7 +469,11 @@ def test_mujoco_warnings_go_to_logging_not_to_a_log_file(tmp_path, monkeypatch, 
     physics.data.qvel[:] = np.nan
     with caplog.at_level("WARNING"), physics.suppress_physics_errors():
         physics.step()
-    assert "MuJoCo warning: Nan, Inf or huge value in Q" in caplog.text
+    messages = [record.getMessage() for record in caplog.records]
+    assert any(
+        message.startswith("MuJoCo warning: Nan, Inf or huge value in Q") and message.endswith(".")
+        for message in messages
+    ), messages
     assert not (tmp_path / "MUJOCO_LOG.TXT").exists()
 
 
@@ -515,3 +519,28 @@ def test_binding_a_generator_after_a_list_returns_the_cached_binding():
     geoms = root.find_all("geom")[:2]
     first = physics.bind(geoms)
     assert physics.bind(geom for geom in geoms) is first
+
+
+def test_forward_raises_when_mujoco_warns(physics):
+    physics.data.ctrl[0] = np.nan
+    with pytest.raises(PhysicsError) as raised:
+        physics.forward()
+    assert str(raised.value) == "Physics state is invalid. Warning(s) raised: mjWARN_BADCTRL"
+
+
+def test_construction_logs_a_warning_raised_by_its_first_forward(caplog):
+    # Six overlapping free spheres make more constraints than 16 KB of arena memory holds.
+    bodies = "<body><freejoint/><geom size='1'/></body>" * 6
+    xml = f"<mujoco><size memory='16K'/><worldbody>{bodies}</worldbody></mujoco>"
+    with caplog.at_level(logging.WARNING):
+        Physics.from_xml_string(xml)
+    messages = [record.getMessage() for record in caplog.records]
+    assert "Physics state is invalid. Warning(s) raised: mjWARN_CNSTRFULL" in messages
+
+
+def test_is_dirty_is_false_after_forward_and_on_copies(physics):
+    physics.mark_as_dirty()
+    physics.forward()
+    assert physics.is_dirty is False
+    assert physics.copy().is_dirty is False
+    assert pickle.loads(pickle.dumps(physics)).is_dirty is False
