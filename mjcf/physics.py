@@ -455,11 +455,24 @@ class Physics:
         self.legacy_step = state["legacy_step"]
 
     def free(self) -> None:
-        """Releases renderers and MuJoCo structures; the Physics is unusable afterwards."""
+        """Releases renderers and MuJoCo structures; the Physics is unusable afterwards.
+
+        Any later use raises an AttributeError that says the Physics was freed.
+        """
         self._close_renderers()
         self._bindings = {}
         self._named = None
         del self._sim, self._model, self._data, self._layout, self._ctrl
+        self._freed = True
+
+    def __getattr__(self, name: str):
+        # Only reached for missing attributes, such as the structures free() deleted.
+        if self.__dict__.get("_freed"):
+            raise AttributeError(
+                f"this {type(self).__name__} was freed (free() was called) and can no longer "
+                f"be used; it has no {name!r}"
+            )
+        raise AttributeError(f"{type(self).__name__!r} object has no attribute {name!r}")
 
     def _close_renderers(self) -> None:
         if self._renderers is not None:

@@ -469,3 +469,310 @@ def test_error_inside_a_childs_tag_surfaces_from_the_tag_property():
     with pytest.raises(AttributeError) as raised:
         model.worldbody  # noqa: B018
     assert traceback.extract_tb(raised.tb)[-1].name == "tag"
+
+
+def test_item_write_with_row_and_column_on_a_scattered_list_writes_that_row(scene):
+    physics = scene.physics
+    rgba = physics.bind([scene.lower, scene.ball]).rgba
+    rgba[1, 0] = 0.25
+    ball = scene.object_id(mujoco.mjtObj.mjOBJ_GEOM, "ball")
+    np.testing.assert_array_equal(physics.model.geom_rgba[ball], [0.25, 0, 0, 1])
+
+
+def test_bound_array_repr_is_that_of_its_values(scene):
+    rgba = scene.physics.bind(scene.ball).rgba
+    assert repr(rgba) == "array([1., 0., 0., 1.], dtype=float32)"
+
+
+def test_bound_array_copy_is_c_ordered_unless_asked_otherwise(scene):
+    xpos = scene.physics.bind([scene.ball_body, scene.forearm]).xpos
+    transposed = xpos.T.copy()
+    assert type(transposed) is np.ndarray
+    assert transposed.flags.c_contiguous
+    np.testing.assert_allclose(transposed, [[0, 1.3], [0, 0], [1, 1]])
+    fortran = xpos.copy(order="F")
+    assert fortran.flags.f_contiguous and not fortran.flags.c_contiguous
+    np.testing.assert_allclose(fortran, [[0, 0, 1], [1.3, 0, 1]])
+
+
+def test_pickling_a_bound_array_names_its_type_in_the_error(scene):
+    import pickle
+
+    with pytest.raises(NotImplementedError) as raised:
+        pickle.dumps(scene.physics.bind(scene.ball).rgba)
+    assert str(raised.value) == (
+        "a <class 'mjcf.binding._BoundArray'> cannot be pickled: it reads and writes the live "
+        "simulation; pickle a copy instead (np.array(bound_array))"
+    )
+
+
+def test_binding_constructed_by_namespace_and_one_name(scene):
+    from mjcf import physics as physics_module
+
+    scene.physics.named.data.qpos["hinge"] = 0.5
+    bound = physics_module.Binding(scene.physics, "joint", "hinge")
+    assert bound.qpos.shape == (1,)
+    assert bound.qpos[0] == 0.5
+    assert bound.element_id == scene.object_id(mujoco.mjtObj.mjOBJ_JOINT, "hinge")
+    assert type(bound.element_id) is int
+    np.testing.assert_allclose(bound.range, np.radians([-45, 90]))
+    assert bound.range.shape == (2,)
+    assert repr(bound) == "Binding(<joint name='hinge'>)"
+
+
+def test_binding_constructed_by_namespace_and_names_describes_them(scene):
+    from mjcf import physics as physics_module
+
+    bound = physics_module.Binding(scene.physics, "geom", ["ball", "upper"])
+    assert repr(bound) == "Binding([2 geom])"
+
+
+def test_binding_constructed_with_a_missing_name_says_which(scene):
+    from mjcf import physics as physics_module
+
+    with pytest.raises(ValueError) as raised:
+        physics_module.Binding(scene.physics, "joint", ["hinge", "elbow"])
+    assert str(raised.value) == "the model has no joint named 'elbow'"
+
+
+def test_item_assignment_by_attribute_name_writes_the_field(scene):
+    physics = scene.physics
+    physics.bind(scene.hinge)["damping"] = 0.75
+    physics.bind(scene.ball)["pos"] = [0.1, 0.2, 0.3]
+    hinge_dof = physics.model.jnt_dofadr[scene.object_id(mujoco.mjtObj.mjOBJ_JOINT, "hinge")]
+    assert physics.model.dof_damping[hinge_dof] == 0.75
+    ball = scene.object_id(mujoco.mjtObj.mjOBJ_GEOM, "ball")
+    np.testing.assert_array_equal(physics.model.geom_pos[ball], [0.1, 0.2, 0.3])
+
+
+def test_binding_dir_lists_methods_and_fields(scene):
+    assert {"element_id", "qpos", "range"} <= set(dir(scene.physics.bind(scene.hinge)))
+
+
+def test_one_column_label_reads_a_scalar(scene):
+    height = scene.physics.bind(scene.ball_body)["xpos", "z"]
+    assert np.ndim(height) == 0
+    assert height == 1.0
+
+
+@pytest.mark.parametrize(
+    "columns, expected",
+    [(3, [1, 1]), ([0, 3], [[1, 1], [0.5, 1]]), (slice(2, None), [[0, 1], [0.5, 1]])],
+)
+def test_integer_and_slice_columns_index_a_binding(scene, columns, expected):
+    physics = scene.physics
+    physics.bind(scene.upper).rgba = [0.5, 0.5, 0.5, 1]
+    np.testing.assert_array_equal(
+        physics.bind([scene.ball, scene.upper])["rgba", columns], expected
+    )
+
+
+def test_unknown_column_label_is_a_key_error_listing_the_labels(scene):
+    with pytest.raises(KeyError) as raised:
+        _ = scene.physics.bind(scene.ball)["rgba", "w"]
+    assert raised.value.args[0] == (
+        "field 'geom_rgba' has no column 'w'; columns are ('r', 'g', 'b', 'a')"
+    )
+
+
+def test_column_label_of_a_one_dimensional_field_is_a_key_error():
+    # Three hinges make qpos three long: its length must not pass for x, y, z columns.
+    root = mjcf.RootElement()
+    body = root.worldbody
+    for name in ("a", "b", "c"):
+        body = body.add("body", name=name)
+        body.add("joint", name=name)
+        body.add("geom", size=[0.1])
+    physics = Physics.from_mjcf_model(root)
+    with pytest.raises(KeyError) as raised:
+        _ = physics.bind(root.find("joint", "a"))["qpos", "x"]
+    assert raised.value.args[0] == "field 'qpos' has no column labels; got 'x'"
+
+
+def test_missing_mocap_row_error_names_the_attribute_and_body(scene):
+    with pytest.raises(AttributeError) as raised:
+        _ = scene.physics.bind(scene.arm).mocap_pos
+    assert str(raised.value) == (
+        "<body name='arm'> has no attribute 'mocap_pos': body 'arm' has no row in mocap_pos"
+    )
+
+
+def test_empty_binding_repr(scene):
+    assert repr(scene.physics.bind([])) == "Binding()"
+
+
+def test_empty_binding_can_be_copied(scene):
+    import copy
+
+    copied = copy.deepcopy(scene.physics.bind([]))
+    assert copied.xpos.shape == (0,)
+    assert copy.copy(scene.physics.bind([])).qpos.shape == (0,)
+
+
+def test_worldbody_binds_together_with_other_bodies(scene):
+    bound = scene.physics.bind([scene.root.worldbody, scene.arm])
+    np.testing.assert_array_equal(bound.xpos, [[0, 0, 0], [1, 0, 1]])
+
+
+@pytest.mark.parametrize("mocap_first", [True, False])
+def test_mixing_mocap_and_other_bodies_error_says_which_is_mocap(scene, mocap_first):
+    bodies = [scene.target, scene.arm] if mocap_first else [scene.arm, scene.target]
+    with pytest.raises(ValueError) as raised:
+        scene.physics.bind(bodies)
+    assert str(raised.value) == (
+        "cannot bind mocap and other bodies together: <body name='target'> is a mocap body, "
+        "<body name='arm'> is not"
+    )
+
+
+def test_element_of_another_model_error_names_both_models(scene):
+    other = mjcf.RootElement(model="other")
+    stranger = other.worldbody.add("geom", name="ball", size=[1])
+    with pytest.raises(ValueError) as raised:
+        scene.physics.bind(stranger)
+    assert str(raised.value) == (
+        "cannot bind <geom name='ball'>: it belongs to another model ('other'), not to the "
+        "model compiled into this Physics ('scene')"
+    )
+
+
+def test_element_of_a_same_named_model_error_explains_copies(scene):
+    twin = mjcf.RootElement(model="scene")
+    stranger = twin.worldbody.add("geom", name="ball", size=[1])
+    with pytest.raises(ValueError) as raised:
+        scene.physics.bind(stranger)
+    assert str(raised.value) == (
+        "cannot bind <geom name='ball'>: it belongs to another model ('scene'), not to the "
+        "model compiled into this Physics ('scene'); they are different objects of the same "
+        "name (a copy made by pickling or copy.deepcopy binds its own elements, not the "
+        "original's)"
+    )
+
+
+def test_element_outside_any_model_error_calls_its_model_unnamed(scene):
+    loose = _FakeElement("geom", "geom", "ball")  # the mjcf interface, but no root
+    with pytest.raises(ValueError) as raised:
+        scene.physics.bind(loose)
+    assert str(raised.value) == (
+        "cannot bind <geom name='ball'>: it belongs to another model ('unnamed model'), not to "
+        "the model compiled into this Physics ('scene')"
+    )
+
+
+def test_element_added_after_compiling_error_in_full(scene):
+    late = scene.root.worldbody.add("geom", name="late", size=[1])
+    with pytest.raises(ValueError) as raised:
+        scene.physics.bind(late)
+    assert str(raised.value) == (
+        "cannot bind <geom name='late'>: the model compiled into this Physics has no geom "
+        "named 'late'"
+    )
+
+
+def test_element_without_a_compiled_object_error_in_full(scene):
+    with pytest.raises(ValueError) as raised:
+        scene.physics.bind(scene.root.compiler)
+    assert str(raised.value) == (
+        "cannot bind <compiler>: <compiler> elements are not compiled into a MuJoCo object"
+    )
+
+
+def test_frame_element_error_says_it_has_no_fields():
+    root = mjcf.RootElement()
+    frame = root.worldbody.add("frame", name="offset")
+    frame.add("geom", size=[1])
+    physics = Physics.from_mjcf_model(root)
+    with pytest.raises(ValueError) as raised:
+        physics.bind(frame)
+    assert str(raised.value) == "cannot bind <frame name='offset'>: no MuJoCo fields for 'frame'"
+
+
+def test_non_element_in_a_list_error_names_its_type(scene):
+    with pytest.raises(ValueError) as raised:
+        scene.physics.bind([scene.ball, 5])
+    assert str(raised.value) == "bind expects mjcf elements; item 1 is a int"
+
+
+def test_describe_names_a_non_element_by_its_type():
+    from mjcf.binding import describe
+
+    assert describe(object()) == "<object>"
+
+
+@pytest.mark.parametrize(
+    "elements, expected",
+    [
+        (lambda scene: scene.ball, "Binding(<geom name='ball'>)"),
+        (lambda scene: [scene.ball], "Binding([<geom name='ball'>])"),
+        (lambda scene: [scene.ball, scene.upper], "Binding([2 geom elements])"),
+    ],
+)
+def test_binding_repr_describes_its_elements(scene, elements, expected):
+    assert repr(scene.physics.bind(elements(scene))) == expected
+
+
+def test_unknown_attribute_without_close_names_says_only_that(scene):
+    with pytest.raises(AttributeError) as raised:
+        _ = scene.physics.bind(scene.ball).zzzz
+    assert str(raised.value) == "<geom name='ball'> has no attribute 'zzzz'"
+
+
+def test_unknown_attribute_suggests_at_most_three_names(scene):
+    with pytest.raises(AttributeError) as raised:
+        _ = scene.physics.bind(scene.arm).poss  # pos, xpos, ipos and xipos are all close
+    assert str(raised.value) == (
+        "<body name='arm'> has no attribute 'poss'; did you mean pos, xpos, ipos?"
+    )
+
+
+def test_attribute_of_a_newer_mujoco_names_the_release(scene, monkeypatch):
+    from mjcf import mujoco_compat
+
+    monkeypatch.setitem(mujoco_compat.BINDING_SINCE, "geom.sparkle", "99.0.0")
+    with pytest.raises(AttributeError) as raised:
+        _ = scene.physics.bind(scene.ball).sparkle
+    assert str(raised.value) == (
+        "<geom name='ball'> has no attribute 'sparkle': geom attribute 'sparkle' needs "
+        f"mujoco>=99.0.0 (installed: mujoco {mujoco.__version__})"
+    )
+
+
+def test_item_write_to_a_scattered_derived_field_is_kept_until_forward(scene):
+    physics = scene.physics
+    bodies = [scene.forearm, scene.ball_body]
+    physics.bind(bodies).xpos[1, 2] = 7.0
+    assert not physics.is_dirty
+    assert physics.bind(bodies).xpos[1, 2] == 7.0
+    physics.forward()
+    assert physics.bind(bodies).xpos[1, 2] == 1.0
+
+
+def test_scattered_model_field_reads_see_writes_made_elsewhere(scene):
+    physics = scene.physics
+    geoms = [scene.lower, scene.ball]
+    np.testing.assert_array_equal(physics.bind(geoms).rgba[1], [1, 0, 0, 1])
+    physics.named.model.geom_rgba["ball"] = [0, 0, 1, 1]
+    np.testing.assert_array_equal(physics.bind(geoms).rgba[1], [0, 0, 1, 1])
+
+
+def test_two_mocap_bodies_bind_together():
+    root = mjcf.RootElement()
+    targets = [
+        root.worldbody.add("body", name=name, mocap=True, pos=[index, 0, 0])
+        for index, name in enumerate(["first", "second"])
+    ]
+    physics = Physics.from_mjcf_model(root)
+    bound = physics.bind(targets)
+    np.testing.assert_array_equal(bound.mocap_pos, [[0, 0, 0], [1, 0, 0]])
+    bound.mocap_pos[1] = [1, 2, 3]
+    physics.forward()
+    np.testing.assert_array_equal(physics.data.xpos[2], [1, 2, 3])
+
+
+def test_worldbody_of_an_attached_model_binds_the_world_in_a_physics_of_its_own_xml():
+    scene = mjcf.RootElement(model="scene")
+    arm = mjcf.RootElement(model="arm")
+    arm.worldbody.add("body", name="link", pos=[0, 0, 1]).add("geom", size=[0.1])
+    scene.worldbody.add("site", name="mount", pos=[3, 0, 0]).attach(arm)
+    physics = Physics.from_xml_string(arm.to_xml_string())  # knows no MJCF model
+    assert physics.bind(arm.worldbody).element_id == 0

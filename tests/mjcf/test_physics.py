@@ -161,6 +161,19 @@ def test_step_in_one_chunk_equals_single_steps(integrator, legacy_step):
     np.testing.assert_array_equal(chunked.data.xpos, single.data.xpos)
 
 
+@pytest.mark.parametrize("nstep", [2, 3])
+def test_legacy_step_of_a_few_steps_advances_exactly_that_many(physics, nstep):
+    model = physics.model.ptr
+    reference = mujoco.MjData(model)
+    reference.qvel[:] = physics.data.qvel[:] = 0.5
+    physics.forward()  # a legacy step continues from the last forward pass
+    mujoco.mj_step(model, reference, nstep)
+    physics.step(nstep)
+    assert physics.time() == reference.time
+    np.testing.assert_array_equal(physics.data.qpos, reference.qpos)
+    np.testing.assert_array_equal(physics.data.qvel, reference.qvel)
+
+
 def test_step_advances_time_by_nstep_timesteps(physics):
     physics.step(4)
     assert physics.time() == pytest.approx(4 * 0.005)
@@ -174,6 +187,17 @@ def test_forward_updates_positions_after_a_qpos_write(physics):
     physics.data.qpos[:3] = [2, 3, 4]
     physics.forward()
     np.testing.assert_array_equal(physics.data.xpos[_body_id(physics, "ball_body")], [2, 3, 4])
+
+
+def test_mark_as_dirty_makes_bindings_recompute_positions():
+    root = mjcf.from_xml_string(_xml())
+    physics = Physics.from_mjcf_model(root)
+    ball_body = root.find("body", "ball_body")
+    np.testing.assert_array_equal(physics.bind(ball_body).xpos, [0, 0, 1])
+    physics.data.qpos[:3] = [4, 5, 6]  # a direct write: the binding cannot see it
+    physics.mark_as_dirty()
+    assert physics.is_dirty is True
+    np.testing.assert_array_equal(physics.bind(ball_body).xpos, [4, 5, 6])
 
 
 def test_reset_restores_the_initial_state(physics):
@@ -197,6 +221,12 @@ def test_reset_runs_forward_without_actuation(physics):
 def test_reset_rejects_a_missing_keyframe(physics):
     with pytest.raises(ValueError, match="keyframe_id 3"):
         physics.reset(keyframe_id=3)
+
+
+def test_reset_rejects_the_keyframe_id_one_past_the_last(physics):
+    with pytest.raises(ValueError) as raised:
+        physics.reset(keyframe_id=1)  # the model has one keyframe, id 0
+    assert str(raised.value) == "keyframe_id 1 is out of range: the model has 1 keyframe(s)"
 
 
 def test_reset_context_keeps_the_state_set_inside_and_updates_positions(physics):
@@ -283,8 +313,20 @@ def test_set_state_restores_a_saved_state(physics):
 
 
 def test_set_state_rejects_a_wrong_size(physics):
-    with pytest.raises(ValueError, match=r"expected \(23,\)"):
+    with pytest.raises(ValueError) as raised:
         physics.set_state(np.zeros(5))
+    assert str(raised.value) == (
+        "physics_state has shape (5,); expected (23,) (qpos, qvel, act, ...)"
+    )
+
+
+def test_set_state_accepts_a_list_of_ints(physics):
+    state = [0] * 23
+    state[2] = 3  # ball height (qpos)
+    state[12] = 2  # ball x velocity (qvel)
+    physics.set_state(state)
+    np.testing.assert_array_equal(physics.data.qpos[:4], [0, 0, 3, 0])
+    assert physics.data.qvel[0] == 2.0
 
 
 def test_copy_starts_from_the_same_state(physics):
@@ -357,8 +399,27 @@ def test_unpickled_physics_keeps_legacy_step_off(physics):
 
 def test_free_makes_the_physics_unusable(physics):
     physics.free()
-    with pytest.raises(AttributeError):
+    with pytest.raises(AttributeError, match="was freed"):
         physics.step()
+
+
+def test_free_drops_named_indexing_and_bindings_with_a_clear_error():
+    root = mjcf.from_xml_string(_xml())
+    physics = Physics.from_mjcf_model(root)
+    geoms = root.find_all("geom")
+    _ = physics.named.data.qpos, physics.bind(geoms).xpos
+    physics.free()
+    with pytest.raises(AttributeError, match="^this Physics was freed"):
+        _ = physics.named
+    with pytest.raises(AttributeError, match="^this Physics was freed"):
+        physics.bind(geoms[:2])
+    with pytest.raises(AttributeError, match="^this Physics was freed"):
+        physics.bind(geoms[0])
+
+
+def test_a_missing_attribute_of_a_live_physics_is_named(physics):
+    with pytest.raises(AttributeError, match="^'Physics' object has no attribute 'colour'$"):
+        _ = physics.colour
 
 
 def _arm_model():
@@ -408,5 +469,78 @@ def test_mujoco_warnings_go_to_logging_not_to_a_log_file(tmp_path, monkeypatch, 
     physics.data.qvel[:] = np.nan
     with caplog.at_level("WARNING"), physics.suppress_physics_errors():
         physics.step()
-    assert "MuJoCo warning" in caplog.text
+    messages = [record.getMessage() for record in caplog.records]
+    assert any(
+        message.startswith("MuJoCo warning: Nan, Inf or huge value in Q") and message.endswith(".")
+        for message in messages
+    ), messages
     assert not (tmp_path / "MUJOCO_LOG.TXT").exists()
+
+
+def test_warnings_raised_together_are_all_named():
+    physics = Physics.from_xml_string(_xml())
+    with pytest.raises(PhysicsError) as raised:
+        with physics.check_invalid_state():
+            physics.data.qpos[0] = np.nan
+            mujoco.mj_step(physics.model.ptr, physics.data.ptr)  # resets the data
+            physics.data.ctrl[0] = np.nan
+            mujoco.mj_step(physics.model.ptr, physics.data.ptr)  # zeroes the control
+    assert str(raised.value) == (
+        "Physics state is invalid. Warning(s) raised: mjWARN_BADQPOS, mjWARN_BADCTRL"
+    )
+
+
+def test_constructor_accepts_a_data_wrapper(physics):
+    physics.step(3)
+    twin = Physics(physics.data)
+    assert twin.data.ptr is physics.data.ptr
+    assert twin.time() == pytest.approx(3 * 0.005)
+
+
+def test_from_model_accepts_a_model_wrapper(physics):
+    assert Physics.from_model(physics.model).model.ptr is physics.model.ptr
+
+
+def test_bind_none_error_in_full(physics):
+    with pytest.raises(ValueError) as raised:
+        physics.bind(None)
+    assert str(raised.value) == "bind expects an mjcf element or a sequence of them, got None"
+
+
+def test_bind_of_a_non_sequence_error_names_its_type(physics):
+    with pytest.raises(ValueError) as raised:
+        physics.bind(5)
+    assert str(raised.value) == "bind expects an mjcf element or a sequence of them, got int"
+
+
+def test_binding_a_generator_after_a_list_returns_the_cached_binding():
+    root = mjcf.from_xml_string(_xml())
+    physics = Physics.from_mjcf_model(root)
+    geoms = root.find_all("geom")[:2]
+    first = physics.bind(geoms)
+    assert physics.bind(geom for geom in geoms) is first
+
+
+def test_forward_raises_when_mujoco_warns(physics):
+    physics.data.ctrl[0] = np.nan
+    with pytest.raises(PhysicsError) as raised:
+        physics.forward()
+    assert str(raised.value) == "Physics state is invalid. Warning(s) raised: mjWARN_BADCTRL"
+
+
+def test_construction_logs_a_warning_raised_by_its_first_forward(caplog):
+    # Six overlapping free spheres make more constraints than 16 KB of arena memory holds.
+    bodies = "<body><freejoint/><geom size='1'/></body>" * 6
+    xml = f"<mujoco><size memory='16K'/><worldbody>{bodies}</worldbody></mujoco>"
+    with caplog.at_level(logging.WARNING):
+        Physics.from_xml_string(xml)
+    messages = [record.getMessage() for record in caplog.records]
+    assert "Physics state is invalid. Warning(s) raised: mjWARN_CNSTRFULL" in messages
+
+
+def test_is_dirty_is_false_after_forward_and_on_copies(physics):
+    physics.mark_as_dirty()
+    physics.forward()
+    assert physics.is_dirty is False
+    assert physics.copy().is_dirty is False
+    assert pickle.loads(pickle.dumps(physics)).is_dirty is False

@@ -54,3 +54,37 @@ def test_writing_ipos_through_a_binding_clears_the_simple_body_flag():
     assert physics.model.body_simple[1] == 0
     physics.forward()
     np.testing.assert_allclose(physics.data.xipos[1], [0, 0, 1.05])
+
+
+def _body_with_three_geoms_and_a_camera():
+    root = mjcf.RootElement()
+    body = root.worldbody.add("body", name="holder", pos=[0, 0, 1])
+    for index in range(3):
+        body.add("geom", name=f"geom{index}", size=[0.1])
+    body.add("camera", name="eye")
+    return root, mjcf.Physics.from_mjcf_model(root)
+
+
+def test_writing_one_geoms_position_clears_only_its_own_frame_flag():
+    root, physics = _body_with_three_geoms_and_a_camera()
+    assert list(physics.model.geom_sameframe) == [1, 1, 1]  # all at the body origin
+    physics.bind(root.find("geom", "geom1")).pos = [0.5, 0, 0]
+    assert list(physics.model.geom_sameframe) == [1, 0, 1]
+    physics.forward()
+    np.testing.assert_allclose(physics.data.geom_xpos[1], [0.5, 0, 1])
+
+
+def test_writing_a_list_of_geoms_positions_clears_each_frame_flag():
+    root, physics = _body_with_three_geoms_and_a_camera()
+    geoms = [root.find("geom", "geom0"), root.find("geom", "geom2")]
+    physics.bind(geoms).pos = [[0, 0.5, 0], [0, 0, 0.5]]
+    assert list(physics.model.geom_sameframe) == [0, 1, 0]
+    physics.forward()
+    np.testing.assert_allclose(physics.data.geom_xpos[[0, 2]], [[0, 0.5, 1], [0, 0, 1.5]])
+
+
+def test_writing_a_camera_position_through_a_binding_moves_it():
+    root, physics = _body_with_three_geoms_and_a_camera()
+    camera = physics.bind(root.find("camera", "eye"))
+    camera.pos = [0, -2, 0]
+    np.testing.assert_allclose(camera.xpos, [0, -2, 1])

@@ -108,3 +108,19 @@ def test_image_larger_than_the_offscreen_buffer_is_an_error(physics):
 def test_overlays_are_rejected(physics):
     with pytest.raises(ValueError, match="overlays"):
         physics.render(overlays=["text"])
+
+
+def test_render_after_free_is_a_clear_error():
+    physics = Physics.from_xml_string(_XML)
+    physics.render(height=8, width=8)
+    physics.free()
+    with pytest.raises(AttributeError, match="^this Physics was freed"):
+        physics.render(height=8, width=8)
+
+
+def test_scene_option_hiding_geom_group_0_hides_the_box(physics):
+    option = mujoco.MjvOption()
+    option.geomgroup[0] = 0
+    image = physics.render(height=60, width=80, camera_id="front", scene_option=option)
+    red, green, blue = image[30, 40].astype(int)
+    assert not (red > 100 and red > 2 * green and red > 2 * blue)
