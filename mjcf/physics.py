@@ -463,16 +463,7 @@ class Physics:
         self._bindings = {}
         self._named = None
         del self._sim, self._model, self._data, self._layout, self._ctrl
-        self._freed = True
-
-    def __getattr__(self, name: str):
-        # Only reached for missing attributes, such as the structures free() deleted.
-        if self.__dict__.get("_freed"):
-            raise AttributeError(
-                f"this {type(self).__name__} was freed (free() was called) and can no longer "
-                f"be used; it has no {name!r}"
-            )
-        raise AttributeError(f"{type(self).__name__!r} object has no attribute {name!r}")
+        self.__class__ = _FreedPhysics
 
     def _close_renderers(self) -> None:
         if self._renderers is not None:
@@ -560,3 +551,19 @@ def _describe_compile_error(message: str, xml_string: str) -> str:
     if xml_line:
         parts.append(f"\nOffending XML: {xml_line}")
     return "".join(parts)
+
+
+class _FreedPhysics(Physics):
+    """What a `Physics` becomes once freed: any use but `free()` raises an AttributeError
+    that says so (the attributes' own errors stay intact on a live Physics)."""
+
+    def __getattribute__(self, name: str):
+        if name == "free" or name.startswith("__"):
+            return object.__getattribute__(self, name)
+        raise AttributeError(
+            f"this Physics was freed (free() was called) and can no longer be used; it has no "
+            f"{name!r}"
+        )
+
+    def free(self) -> None:
+        """Does nothing: the Physics is already freed."""

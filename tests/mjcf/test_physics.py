@@ -401,6 +401,10 @@ def test_free_makes_the_physics_unusable(physics):
     physics.free()
     with pytest.raises(AttributeError, match="was freed"):
         physics.step()
+    with pytest.raises(AttributeError, match="was freed"):
+        physics.set_control([0.0])
+    physics.free()
+    assert isinstance(physics, Physics)
 
 
 def test_free_drops_named_indexing_and_bindings_with_a_clear_error():
