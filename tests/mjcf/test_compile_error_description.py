@@ -35,6 +35,8 @@ def test_name_is_read_from_the_line_when_mujoco_gives_none():
         '<mujoco><worldbody><geom name="a" size="1"/><geom name="a" size="1"/></worldbody></mujoco>'
     )
     assert "Element name" not in _mujoco_message(xml)
+    if "line" not in _mujoco_message(xml):
+        pytest.skip(f"mujoco {mujoco.__version__} reports no XML line for a repeated name")
     assert _describe(xml) == (
         f"MuJoCo could not compile the MJCF model at element 'a': {_mujoco_message(xml)}"
         f"\nOffending XML: {xml}"
@@ -54,8 +56,10 @@ def test_unnamed_element_is_not_given_a_name():
 
 
 def _line_of_length(length: int) -> str:
-    start, end = '<geom type="mesh" mesh="nope" material="', '"/>'
-    return start + "m" * (length - len(start) - len(end)) + end
+    # Padded with spaces inside the tag, which MuJoCo's (length-limited) message never
+    # quotes, so the message keeps its line number on every release.
+    start, end = '<geom type="mesh" mesh="nope"', "/>"
+    return start + " " * (length - len(start) - len(end)) + end
 
 
 def test_a_line_of_500_characters_is_quoted_whole():
