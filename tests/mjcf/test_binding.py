@@ -625,56 +625,48 @@ def test_mixing_mocap_and_other_bodies_error_says_which_is_mocap(scene, mocap_fi
     )
 
 
-def test_element_of_another_model_error_names_both_models(scene):
-    other = mjcf.RootElement(model="other")
-    stranger = other.worldbody.add("geom", name="ball", size=[1])
+def _stranger(model_name):
+    return mjcf.RootElement(model=model_name).worldbody.add("geom", name="ball", size=[1])
+
+
+@pytest.mark.parametrize(
+    ("make_element", "message"),
+    [
+        (
+            lambda scene: _stranger("other"),
+            "cannot bind <geom name='ball'>: it belongs to another model ('other'), not to the "
+            "model compiled into this Physics ('scene')",
+        ),
+        (
+            lambda scene: _stranger("scene"),
+            "cannot bind <geom name='ball'>: it belongs to another model ('scene'), not to the "
+            "model compiled into this Physics ('scene'); they are different objects of the "
+            "same name (a copy made by pickling or copy.deepcopy binds its own elements, not "
+            "the original's)",
+        ),
+        (
+            # The mjcf interface, but no root.
+            lambda scene: _FakeElement("geom", "geom", "ball"),
+            "cannot bind <geom name='ball'>: it belongs to another model ('unnamed model'), not "
+            "to the model compiled into this Physics ('scene')",
+        ),
+        (
+            lambda scene: scene.root.worldbody.add("geom", name="late", size=[1]),
+            "cannot bind <geom name='late'>: the model compiled into this Physics has no geom "
+            "named 'late'",
+        ),
+        (
+            lambda scene: scene.root.compiler,
+            "cannot bind <compiler>: <compiler> elements are not compiled into a MuJoCo object",
+        ),
+    ],
+    ids=["other_model", "same_named_model", "no_model", "added_after_compiling", "compiler"],
+)
+def test_element_that_cannot_be_bound_error_in_full(scene, make_element, message):
+    element = make_element(scene)
     with pytest.raises(ValueError) as raised:
-        scene.physics.bind(stranger)
-    assert str(raised.value) == (
-        "cannot bind <geom name='ball'>: it belongs to another model ('other'), not to the "
-        "model compiled into this Physics ('scene')"
-    )
-
-
-def test_element_of_a_same_named_model_error_explains_copies(scene):
-    twin = mjcf.RootElement(model="scene")
-    stranger = twin.worldbody.add("geom", name="ball", size=[1])
-    with pytest.raises(ValueError) as raised:
-        scene.physics.bind(stranger)
-    assert str(raised.value) == (
-        "cannot bind <geom name='ball'>: it belongs to another model ('scene'), not to the "
-        "model compiled into this Physics ('scene'); they are different objects of the same "
-        "name (a copy made by pickling or copy.deepcopy binds its own elements, not the "
-        "original's)"
-    )
-
-
-def test_element_outside_any_model_error_calls_its_model_unnamed(scene):
-    loose = _FakeElement("geom", "geom", "ball")  # the mjcf interface, but no root
-    with pytest.raises(ValueError) as raised:
-        scene.physics.bind(loose)
-    assert str(raised.value) == (
-        "cannot bind <geom name='ball'>: it belongs to another model ('unnamed model'), not to "
-        "the model compiled into this Physics ('scene')"
-    )
-
-
-def test_element_added_after_compiling_error_in_full(scene):
-    late = scene.root.worldbody.add("geom", name="late", size=[1])
-    with pytest.raises(ValueError) as raised:
-        scene.physics.bind(late)
-    assert str(raised.value) == (
-        "cannot bind <geom name='late'>: the model compiled into this Physics has no geom "
-        "named 'late'"
-    )
-
-
-def test_element_without_a_compiled_object_error_in_full(scene):
-    with pytest.raises(ValueError) as raised:
-        scene.physics.bind(scene.root.compiler)
-    assert str(raised.value) == (
-        "cannot bind <compiler>: <compiler> elements are not compiled into a MuJoCo object"
-    )
+        scene.physics.bind(element)
+    assert str(raised.value) == message
 
 
 def test_frame_element_error_says_it_has_no_fields():
