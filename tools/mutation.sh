@@ -13,9 +13,9 @@
 # mutmut in its own venv (.cache/mutation/venv), so the working tree and its venv are left
 # alone. mutmut runs, for each mutant, the selected tests that exercise the mutated
 # function. Prints mutmut's summary, the surviving mutants (inspect one with `cd
-# .cache/mutation/NAME && ../venv/bin/mutmut show MUTANT`; rerun some after adding tests
-# with `../venv/bin/mutmut run MUTANT ...` once the new test files are copied in), and the
-# kill rate: killed / (killed + survived), timeouts counted as killed.
+# .cache/mutation/NAME && ../venv/bin/mutmut show MUTANT`; rerun them after adding tests
+# with `--only MUTANT ...`, which copies the current tree afresh), and the kill rate:
+# killed / (killed + survived), timeouts counted as killed.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 repo=$(pwd)

@@ -170,17 +170,6 @@ def test_options_changed_between_episodes_take_effect():
     assert observation["joints_qpos"].shape == (3, 2)
 
 
-def _observation_after_a_step(direct, scene):
-    """Starts an episode, takes one control step and returns what the updater observed."""
-    direct.reset(scene.physics, np.random.RandomState(1))
-    direct.prepare_for_next_control_step()
-    scene.physics.set_control([0.5])
-    for _ in range(_SUB_STEPS):
-        scene.physics.step()
-        direct.update()
-    return direct.get_observation()
-
-
 def _single(obs):
     obs.enabled = True
     return {"only": obs}
@@ -191,9 +180,9 @@ def test_a_corruptor_set_between_episodes_is_applied():
     scene = _Scene()
     observables = _single(observable.MJCFFeature("xpos", scene.tip))
     direct = _updater(observables)
-    _observation_after_a_step(direct, scene)
+    _run(scene, [direct], control_steps=1)[0][-1]
     observables["only"].corruptor = lambda value, random_state: value + 1.0
-    observation = _observation_after_a_step(direct, scene)
+    observation = _run(scene, [direct], control_steps=1)[0][-1]
     np.testing.assert_array_equal(observation["only"][0], scene.physics.bind(scene.tip).xpos + 1)
 
 
@@ -201,9 +190,9 @@ def test_an_observable_replaced_between_episodes_is_the_one_read():
     scene = _Scene()
     observables = _single(observable.MJCFFeature("qpos", [scene.hinge, scene.slide]))
     direct = _updater(observables)
-    _observation_after_a_step(direct, scene)
+    _run(scene, [direct], control_steps=1)[0][-1]
     observables.update(_single(observable.MJCFFeature("qpos", [scene.slide, scene.slide])))
-    observation = _observation_after_a_step(direct, scene)
+    observation = _run(scene, [direct], control_steps=1)[0][-1]
     slide = scene.physics.bind(scene.slide).qpos[0]
     assert slide != 0
     np.testing.assert_array_equal(observation["only"], [[slide, slide]])
@@ -215,12 +204,12 @@ def test_observables_enabled_or_disabled_between_episodes_are_observed_according
     observables = _observables(scene)
     observables["extra_tip"] = observable.MJCFFeature("xpos", scene.tip)
     direct = _updater(observables)
-    _observation_after_a_step(direct, scene)
+    _run(scene, [direct], control_steps=1)[0][-1]
     if change == "enable_one_more":
         observables["extra_tip"].enabled = True
     else:
         observables["tip"].enabled = False
-    observation = _observation_after_a_step(direct, scene)
+    observation = _run(scene, [direct], control_steps=1)[0][-1]
     tip = scene.physics.bind(scene.tip).xpos
     assert ("extra_tip" in observation) is (change == "enable_one_more")
     assert ("tip" in observation) is (change == "enable_one_more")
@@ -402,7 +391,7 @@ def test_an_integer_model_field_is_observed_with_its_dtype():
     obs = observable.MJCFFeature("contype", geom)
     obs.enabled = True
     direct = _updater({"contype": obs})
-    observation = _observation_after_a_step(direct, scene)["contype"]
+    observation = _run(scene, [direct], control_steps=1)[0][-1]["contype"]
     assert observation.dtype == scene.physics.bind(geom).contype.dtype == np.int32
     np.testing.assert_array_equal(observation, [1])
 
@@ -438,7 +427,7 @@ def test_an_unusable_live_source_is_ignored_and_the_observable_called(source):
     # The source arrays hold zeros; the observable's value, the physics time, is not zero.
     scene = _Scene()
     direct = _updater(_single(_TimeWithSource(source)))
-    observation = _observation_after_a_step(direct, scene)
+    observation = _run(scene, [direct], control_steps=1)[0][-1]
     assert observation["only"].tolist() == [[scene.physics.data.time]]
 
 
@@ -478,7 +467,7 @@ def test_an_update_interval_changed_between_episodes_changes_when_it_samples():
     for obs in observables.values():
         obs.enabled = True
     direct = _updater(observables)
-    _observation_after_a_step(direct, scene)
+    _run(scene, [direct], control_steps=1)[0][-1]
     observables["slide"].update_interval = 2
     direct.reset(scene.physics, np.random.RandomState(1))
     direct.prepare_for_next_control_step()

@@ -287,10 +287,6 @@ def test_named_aggregators_reduce_the_buffer_axis_for_every_dtype(name, expected
     np.testing.assert_allclose(result, expected)
 
 
-def _options_of(obs):
-    return (obs.update_interval, obs.buffer_size, obs.delay, obs.aggregator, obs.corruptor)
-
-
 @pytest.mark.parametrize("kind", ["mjcf_feature", "mujoco_feature", "mjcf_camera", "mujoco_camera"])
 def test_constructor_options_are_kept(scene, kind):
     options = dict(update_interval=3, buffer_size=4, delay=2, aggregator="max", corruptor=_double)
@@ -302,7 +298,7 @@ def test_constructor_options_are_kept(scene, kind):
         obs = observable.MJCFCamera(scene.camera, height=8, width=12, **options)
     else:
         obs = observable.MujocoCamera("top", height=8, width=12, **options)
-    assert _options_of(obs)[:3] == (3, 4, 2)
+    assert _with_options(obs)[:3] == (3, 4, 2)
     assert obs.aggregator(np.array([[1.0], [5.0]])).tolist() == [5.0]
     assert obs.corruptor is _double
 
