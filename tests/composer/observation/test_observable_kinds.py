@@ -234,13 +234,15 @@ def _double(value, random_state):
     return 2 * value
 
 
+_OPTIONS = dict(update_interval=3, buffer_size=4, delay=2, aggregator="max", corruptor=_double)
+
+
 @pytest.mark.parametrize("kind", ["mjcf_feature", "generic"])
 def test_indexing_keeps_every_option_of_the_observable(scene, kind):
-    options = dict(update_interval=3, buffer_size=4, delay=2, aggregator="max", corruptor=_double)
     if kind == "mjcf_feature":
-        obs = observable.MJCFFeature("xpos", scene.tip, **options)
+        obs = observable.MJCFFeature("xpos", scene.tip, **_OPTIONS)
     else:
-        obs = observable.Generic(lambda physics: np.ones(3), **options)
+        obs = observable.Generic(lambda physics: np.ones(3), **_OPTIONS)
     assert _with_options(obs[1:]) == _with_options(obs)
     assert _with_options(obs[1:]) == (3, 4, 2, obs.aggregator, _double)
 
@@ -289,15 +291,14 @@ def test_named_aggregators_reduce_the_buffer_axis_for_every_dtype(name, expected
 
 @pytest.mark.parametrize("kind", ["mjcf_feature", "mujoco_feature", "mjcf_camera", "mujoco_camera"])
 def test_constructor_options_are_kept(scene, kind):
-    options = dict(update_interval=3, buffer_size=4, delay=2, aggregator="max", corruptor=_double)
     if kind == "mjcf_feature":
-        obs = observable.MJCFFeature("qpos", scene.hinge, **options)
+        obs = observable.MJCFFeature("qpos", scene.hinge, **_OPTIONS)
     elif kind == "mujoco_feature":
-        obs = observable.MujocoFeature("qpos", "hinge", **options)
+        obs = observable.MujocoFeature("qpos", "hinge", **_OPTIONS)
     elif kind == "mjcf_camera":
-        obs = observable.MJCFCamera(scene.camera, height=8, width=12, **options)
+        obs = observable.MJCFCamera(scene.camera, height=8, width=12, **_OPTIONS)
     else:
-        obs = observable.MujocoCamera("top", height=8, width=12, **options)
+        obs = observable.MujocoCamera("top", height=8, width=12, **_OPTIONS)
     assert _with_options(obs)[:3] == (3, 4, 2)
     assert obs.aggregator(np.array([[1.0], [5.0]])).tolist() == [5.0]
     assert obs.corruptor is _double
@@ -319,10 +320,10 @@ def _red_pixels(image):
 
 @pytest.mark.parametrize("kind", ["mjcf_camera", "mujoco_camera"])
 def test_camera_scene_option_and_render_flags_reach_the_renderer(scene, kind):
-    def camera(**options):
+    def camera(**_OPTIONS):
         if kind == "mjcf_camera":
-            return observable.MJCFCamera(scene.camera, height=24, width=32, **options)
-        return observable.MujocoCamera("top", height=24, width=32, **options)
+            return observable.MJCFCamera(scene.camera, height=24, width=32, **_OPTIONS)
+        return observable.MujocoCamera("top", height=24, width=32, **_OPTIONS)
 
     plain = camera()(scene.physics)
     assert _red_pixels(plain) > 0
