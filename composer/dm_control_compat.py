@@ -1,11 +1,15 @@
-"""Serve ``dm_control.composer`` and ``dm_control.mjcf`` from this project's packages.
+"""Serve ``dm_control.composer``, ``dm_control.mjcf`` and ``dm_control.mujoco`` from this
+project's packages.
 
 ``install()`` puts an import hook in front of ``sys.meta_path``: afterwards
-``import dm_control.composer`` (and every ``dm_control.composer.*`` / ``dm_control.mjcf.*``
-module) returns this project's ``composer`` / ``mjcf`` module of the same path. The rest of
-an installed dm_control (``dm_control.entities``, ``dm_control.manipulation``,
-``dm_control.utils``, ...) stays the real one and, since it imports ``composer`` and ``mjcf``
-through the same names, runs on this project. Without an installed dm_control, a bare
+``import dm_control.composer`` (and every ``dm_control.composer.*`` / ``dm_control.mjcf.*`` /
+``dm_control.mujoco.*`` module) returns this project's ``composer`` / ``mjcf`` /
+``mujoco_physics`` module of the same path. The rest of an installed dm_control
+(``dm_control.suite``, ``dm_control.rl``, ``dm_control.locomotion``,
+``dm_control.entities``, ``dm_control.manipulation``, ``dm_control.utils``, ...) stays the real
+one and, since it imports those packages through the same names, runs on this project.
+``dm_control.rl.control.PhysicsError`` becomes this project's ``PhysicsError``, so that
+dm_control's code catches the errors our ``Physics`` raises. Without an installed dm_control, a bare
 ``dm_control`` package is provided so that ``from dm_control import composer, mjcf`` works.
 
 Run a script written for dm_control without editing it::
@@ -31,6 +35,13 @@ import types
 REDIRECTED_PACKAGES: dict[str, str] = {
     "dm_control.composer": "composer",
     "dm_control.mjcf": "mjcf",
+    "dm_control.mujoco": "mujoco_physics",
+}
+
+#: Attributes of real dm_control modules replaced, once such a module is loaded, by this
+#: project's object of the same meaning: module -> {attribute: "module:attribute"}.
+SHARED_ATTRIBUTES: dict[str, dict[str, str]] = {
+    "dm_control.rl.control": {"PhysicsError": "mujoco_physics.engine:PhysicsError"},
 }
 
 
@@ -60,6 +71,23 @@ class _AliasLoader(importlib.abc.Loader):
         module.__spec__ = self._target_spec
 
 
+class _SharingLoader(importlib.abc.Loader):
+    """Runs a real dm_control module, then points its ``SHARED_ATTRIBUTES`` at ours."""
+
+    def __init__(self, loader: importlib.abc.Loader, shared: dict[str, str]):
+        self._loader = loader
+        self._shared = shared
+
+    def create_module(self, spec):
+        return self._loader.create_module(spec)
+
+    def exec_module(self, module):
+        self._loader.exec_module(module)
+        for attribute, source in self._shared.items():
+            module_name, _, name = source.partition(":")
+            setattr(module, attribute, getattr(importlib.import_module(module_name), name))
+
+
 class _BareDmControlLoader(importlib.abc.Loader):
     """Creates an empty ``dm_control`` package when no real one is installed."""
 
@@ -67,7 +95,9 @@ class _BareDmControlLoader(importlib.abc.Loader):
         return None
 
     def exec_module(self, module):
-        module.__doc__ = "Stand-in dm_control package: composer and mjcf come from this project."
+        module.__doc__ = (
+            "Stand-in dm_control package: composer, mjcf and mujoco come from this project."
+        )
 
 
 class DmControlRedirect(importlib.abc.MetaPathFinder):
@@ -76,6 +106,8 @@ class DmControlRedirect(importlib.abc.MetaPathFinder):
     def find_spec(self, fullname, path=None, target=None):
         if fullname == "dm_control":
             return self._dm_control_spec()
+        if fullname in SHARED_ATTRIBUTES:
+            return self._sharing_spec(fullname, path)
         target_name = _target_name(fullname)
         if target_name is None:
             return None
@@ -88,13 +120,25 @@ class DmControlRedirect(importlib.abc.MetaPathFinder):
             is_package=target_spec.submodule_search_locations is not None,
         )
 
-    def _dm_control_spec(self):
+    def _sharing_spec(self, fullname, path):
+        spec = self._spec_from_other_finders(fullname, path)
+        if spec is not None and spec.loader is not None:
+            spec.loader = _SharingLoader(spec.loader, SHARED_ATTRIBUTES[fullname])
+        return spec
+
+    def _spec_from_other_finders(self, fullname, path):
         for finder in sys.meta_path:
             if finder is self or not hasattr(finder, "find_spec"):
                 continue
-            spec = finder.find_spec("dm_control", None)
+            spec = finder.find_spec(fullname, path)
             if spec is not None:
                 return spec
+        return None
+
+    def _dm_control_spec(self):
+        spec = self._spec_from_other_finders("dm_control", None)
+        if spec is not None:
+            return spec
         return importlib.machinery.ModuleSpec("dm_control", _BareDmControlLoader(), is_package=True)
 
 
@@ -104,11 +148,11 @@ def installed() -> bool:
 
 
 def install() -> None:
-    """Serves ``dm_control.composer`` and ``dm_control.mjcf`` from this project from now on.
+    """Serves ``REDIRECTED_PACKAGES`` from this project from now on.
 
     Idempotent. Raises ``RuntimeError`` naming the modules when dm_control's own
-    ``composer`` or ``mjcf`` is already imported, since objects made from those would not
-    mix with this project's.
+    ``composer``, ``mjcf`` or ``mujoco`` is already imported, since objects made from those
+    would not mix with this project's.
     """
     if installed():
         return
@@ -123,7 +167,7 @@ def install() -> None:
 
 
 def uninstall() -> None:
-    """Removes the redirect and forgets the ``dm_control.composer``/``mjcf`` aliases."""
+    """Removes the redirect and forgets the aliases of ``REDIRECTED_PACKAGES``."""
     sys.meta_path[:] = [f for f in sys.meta_path if not isinstance(f, DmControlRedirect)]
     for name in [name for name in sys.modules if _target_name(name) is not None]:
         del sys.modules[name]

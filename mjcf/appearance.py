@@ -20,7 +20,7 @@ that a rangefinder does see a geom's colour.
 
 import mujoco
 
-from mjcf.field_layout import MODEL_EXTENTS
+from mujoco_physics.field_layout import MODEL_EXTENTS
 
 _APPEARANCE_PROPERTIES = frozenset(
     (

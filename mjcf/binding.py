@@ -3,7 +3,7 @@
 A binding's attributes are the MjModel/MjData fields of the elements' object family with the
 family prefix stripped (``geom_rgba`` -> ``rgba``, ``jnt_range`` -> ``range``,
 ``dof_damping`` -> ``damping``, ``ten_length`` -> ``length``), as listed by
-``mjcf.field_layout``. Index arrays are computed once per attribute; rows that are
+``mujoco_physics.field_layout``. Index arrays are computed once per attribute; rows that are
 consecutive are served as NumPy views, other rows are gathered into a reused buffer.
 
 Writes through a binding to an MjModel field or a simulation input (qpos, qvel, ctrl, ...)
@@ -18,8 +18,9 @@ import difflib
 import mujoco
 import numpy as np
 
-from mjcf import field_layout, mujoco_compat
-from mjcf.field_layout import MODEL, Family, ModelLayout
+from mjcf import mujoco_compat
+from mujoco_physics import field_layout
+from mujoco_physics.field_layout import MODEL, Family, ModelLayout
 
 # MjData fields that are simulation inputs, named after the components of MuJoCo's state.
 _INPUT_FIELDS = frozenset(

@@ -1,7 +1,8 @@
 """The MuJoCo releases this project supports, and clear errors where a release lacks a feature.
 
-`MINIMUM_VERSION` is the floor: `check_version` (run when `mjcf` is imported) turns an older
-install into one ImportError instead of an AttributeError from deep inside. Within the
+`MINIMUM_VERSION` is the floor (`mujoco_physics.version`): `check_version` (run when
+`mujoco_physics` or `mjcf` is imported) turns an older install into one ImportError instead of
+an AttributeError from deep inside. Within the
 supported range everything that differs between releases (enums, schema, struct fields) is
 read from the installed library, so a feature the installed release lacks is simply absent.
 The tables below only name the release that introduced such a feature, so that the error
@@ -10,12 +11,10 @@ for using it, and the reason a test of it is skipped, say which MuJoCo to upgrad
 
 from __future__ import annotations
 
-import re
-
 import mujoco
 
-#: The oldest MuJoCo release the whole test suite passes on (also `mujoco>=` in pyproject).
-MINIMUM_VERSION = "3.3.0"
+# The floor and its check live in the engine layer; re-exported here, where tools read them.
+from mujoco_physics.version import MINIMUM_VERSION, check_version, version_tuple  # noqa: F401
 
 #: "tag.name" -> the first release whose XML reader has attribute or child element `name`
 #: in `<tag>` or in the elements nested in `<tag>` ("sensor.interval": every sensor).
@@ -52,23 +51,9 @@ BINDING_SINCE: dict[str, str] = {
 }
 
 
-def _version_tuple(version: str) -> tuple[int, ...]:
-    return tuple(int(part) for part in re.findall(r"\d+", version)[:3])
-
-
-def check_version(installed: str | None = None) -> None:
-    """Raises ImportError when `installed` (default: the imported mujoco's) is below the floor."""
-    installed = mujoco.__version__ if installed is None else installed
-    if _version_tuple(installed) < _version_tuple(MINIMUM_VERSION):
-        raise ImportError(
-            f"this project needs mujoco>={MINIMUM_VERSION}, but mujoco {installed} is "
-            f"installed; upgrade it with: pip install 'mujoco>={MINIMUM_VERSION}'"
-        )
-
-
 def _missing(feature: str, since: str | None, installed: str | None) -> str:
     installed = mujoco.__version__ if installed is None else installed
-    if since is None or _version_tuple(since) <= _version_tuple(installed):
+    if since is None or version_tuple(since) <= version_tuple(installed):
         return ""
     return f"{feature} needs mujoco>={since} (installed: mujoco {installed})"
 

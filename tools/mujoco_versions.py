@@ -6,7 +6,7 @@ Builds one venv per release under ``.cache/mujoco_versions/<version>`` (kept bet
 ``--venvs`` puts them elsewhere), installs this project with its ``[test]`` extra and that
 ``mujoco`` there, and runs ``pytest`` in each with ``MUJOCO_GL=egl``; each run's full output
 goes to ``logs/<version>.txt`` beside the venvs. The releases are the newest patch of every
-minor release that pip offers from the project's floor (``mjcf.mujoco_compat.MINIMUM_VERSION``)
+minor release that pip offers from the project's floor (``mujoco_physics.version.MINIMUM_VERSION``)
 up, the floor version itself, and the newest release below the floor, where importing the
 project must fail with the ImportError that names both versions. ``--releases`` picks some:
 ``floor``, ``newest``, ``below-floor``, a minor (``3.3``, its newest patch) or an exact
@@ -29,7 +29,7 @@ from typing import NamedTuple
 
 REPO = Path(__file__).resolve().parent.parent
 CACHE = REPO / ".cache" / "mujoco_versions"
-_COMPAT_MODULE = REPO / "mjcf" / "mujoco_compat.py"
+_COMPAT_MODULE = REPO / "mujoco_physics" / "version.py"
 _TAIL_LINES = 15
 _SUMMARY_COUNT = re.compile(r"(\d+) (passed|failed|skipped|errors?|xfailed|xpassed)")
 

@@ -1,10 +1,10 @@
-"""Tests for mjcf.field_layout: which fields a binding of each element kind exposes."""
+"""Tests for mujoco_physics.field_layout: which fields a binding of each element kind exposes."""
 
 import mujoco
 import pytest
 
-from mjcf import field_layout
-from mjcf.field_layout import DATA, FAMILIES, MODEL
+from mujoco_physics import field_layout
+from mujoco_physics.field_layout import DATA, FAMILIES, MODEL
 
 
 def _field(namespace, attribute):

@@ -3,7 +3,7 @@
 import pytest
 from mujoco.introspect import ast_nodes
 
-from mjcf import field_layout
+from mujoco_physics import field_layout
 
 _NUMBERS = ast_nodes.PointerType(ast_nodes.ValueType("mjtNum"))
 

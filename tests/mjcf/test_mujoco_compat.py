@@ -9,7 +9,8 @@ import mujoco
 import pytest
 
 import mjcf
-from mjcf import field_layout, mujoco_compat, schema
+from mjcf import mujoco_compat, schema
+from mujoco_physics import field_layout
 
 _REPO = pathlib.Path(__file__).resolve().parents[2]
 
@@ -70,7 +71,7 @@ def test_missing_binding_field_names_the_release_that_has_it():
 
 
 def test_every_mjcf_feature_in_the_table_exists_where_it_says_on_this_release():
-    installed = mujoco_compat._version_tuple(mujoco.__version__)
+    installed = mujoco_compat.version_tuple(mujoco.__version__)
     names_under = {}
     for spec in schema.all_specs():
         for tag in spec.path.split("/"):
@@ -80,15 +81,15 @@ def test_every_mjcf_feature_in_the_table_exists_where_it_says_on_this_release():
     for key, since in mujoco_compat.MJCF_SINCE.items():
         tag, name = key.split(".")
         has = name in names_under.get(tag, ())
-        assert has == (installed >= mujoco_compat._version_tuple(since)), key
+        assert has == (installed >= mujoco_compat.version_tuple(since)), key
 
 
 def test_every_binding_feature_in_the_table_exists_where_it_says_on_this_release():
-    installed = mujoco_compat._version_tuple(mujoco.__version__)
+    installed = mujoco_compat.version_tuple(mujoco.__version__)
     for key, since in mujoco_compat.BINDING_SINCE.items():
         namespace, attribute = key.split(".")
         has = attribute in field_layout.FAMILIES[namespace].fields
-        assert has == (installed >= mujoco_compat._version_tuple(since)), key
+        assert has == (installed >= mujoco_compat.version_tuple(since)), key
 
 
 def test_setting_an_attribute_of_a_newer_mujoco_names_the_release(monkeypatch):

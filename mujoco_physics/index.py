@@ -1,8 +1,9 @@
 """``physics.named.model.<field>[name]`` and ``physics.named.data.<field>[name]``.
 
-Each MjModel/MjData array field gets a ``FieldIndexer`` on first access. Rows of fields that
-belong to an object family (``mjcf.field_layout``) are addressed by the objects' names in the
-compiled model: ``named.data.xpos['torso']``, ``named.model.geom_rgba[['a', 'b']]``,
+Each MjModel/MjData array field gets a ``FieldIndexer`` on first access. Rows of fields
+that belong to an object family (``mujoco_physics.field_layout``) are addressed by the
+objects' names in the compiled model: ``named.data.xpos['torso']``,
+``named.model.geom_rgba[['a', 'b']]``,
 ``named.data.qpos['free_joint']`` (7 values), ``named.data.sensordata['accelerometer']``.
 Integers, slices and arrays index rows directly, as in NumPy; a tuple key indexes rows then
 columns, and labelled columns accept names (``named.data.xpos['torso', 'z']``).
@@ -12,8 +13,8 @@ import collections
 
 import numpy as np
 
-from mjcf import field_layout
-from mjcf.field_layout import ModelLayout
+from mujoco_physics import field_layout
+from mujoco_physics.field_layout import ModelLayout
 
 NamedIndexStructs = collections.namedtuple("NamedIndexStructs", ["model", "data"])
 

@@ -1,5 +1,9 @@
 """Off-screen rendering for ``Physics.render``: one ``mujoco.Renderer`` per image size."""
 
+import contextlib
+from collections.abc import Callable, Iterator
+from typing import NamedTuple
+
 import mujoco
 import numpy as np
 
@@ -85,6 +89,13 @@ class Renderers:
             elif segmentation:
                 renderer.disable_segmentation_rendering()
 
+    def contexts(self) -> "Contexts | None":
+        """dm_control's ``physics.contexts`` over these renderers, or None before the first
+        render (a renderer made later uploads the model's current assets itself)."""
+        if not self._renderers:
+            return None
+        return Contexts(gl=_AllGLContexts(list(self._renderers.values())), mujoco=MJR_CONTEXT)
+
     def close(self) -> None:
         """Releases every renderer and its OpenGL context."""
         for renderer in self._renderers.values():
@@ -107,3 +118,46 @@ class Renderers:
             renderer = mujoco.Renderer(self._model, height=key[0], width=key[1])
             self._renderers[key] = renderer
         return renderer
+
+
+class _MjrContextPlaceholder:
+    """Stands for "each renderer's ``MjrContext``" in the arguments of ``_Caller.call``."""
+
+    @property
+    def ptr(self) -> "_MjrContextPlaceholder":
+        return self
+
+
+MJR_CONTEXT = _MjrContextPlaceholder()
+
+
+class Contexts(NamedTuple):
+    """What dm_control code reaches through ``physics.contexts`` to re-upload changed assets:
+    ``with contexts.gl.make_current() as ctx: ctx.call(mujoco.mjr_uploadHField,
+    model, contexts.mujoco.ptr, hfield_id)`` runs the upload in every renderer's context."""
+
+    gl: "_AllGLContexts"
+    mujoco: _MjrContextPlaceholder
+
+
+class _Caller(NamedTuple):
+    renderers: list
+
+    def call(self, function: Callable, *args):
+        """Calls ``function`` once per renderer, with its GL context current and
+        ``contexts.mujoco.ptr`` replaced by its ``MjrContext``; returns the last result."""
+        result = None
+        for renderer in self.renderers:
+            renderer._gl_context.make_current()
+            result = function(
+                *(renderer._mjr_context if arg is MJR_CONTEXT else arg for arg in args)
+            )
+        return result
+
+
+class _AllGLContexts(NamedTuple):
+    renderers: list
+
+    @contextlib.contextmanager
+    def make_current(self) -> Iterator[_Caller]:
+        yield _Caller(self.renderers)

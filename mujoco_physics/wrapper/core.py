@@ -1,0 +1,414 @@
+"""``MjModel``/``MjData`` with dm_control's interface (``ptr``, ``name2id``, ``disable``, the
+named constructors), the global callbacks, and the visualisation structs with ``ptr``.
+
+Served as ``dm_control.mujoco.wrapper.core``. Attribute reads are forwarded to the wrapped
+MuJoCo object; arrays whose size cannot change (every MjModel array, and the MjData arrays
+sized by model counts) are cached on first read, so later reads are plain
+instance-dictionary hits and return the same NumPy view.
+"""
+
+import contextlib
+import copy
+import time
+from collections.abc import Callable, Iterator
+
+import mujoco
+import numpy as np
+
+from mujoco_physics import field_layout
+
+# The name under which MJB bytes are handed to MuJoCo in a one-file virtual file system.
+_MJB_NAME = "model.mjb"
+
+
+class Error(ValueError):
+    """A model MuJoCo could not load, or a bad object type or id (dm_control's
+    ``wrapper.Error``; a ValueError, as MuJoCo's own loaders raise)."""
+
+
+_DISABLE_PREFIX = "mjDSBL_"
+_ENABLE_PREFIX = "mjENBL_"
+
+
+def _object_type(object_type) -> mujoco.mjtObj:
+    """``mujoco.mjtObj`` for a name such as 'geom' or 'camera', or an mjtObj value."""
+    if isinstance(object_type, str):
+        member = f"mjOBJ_{object_type.upper()}"
+        if member not in mujoco.mjtObj.__members__:
+            known = sorted(
+                name[len("mjOBJ_") :].lower()
+                for name in mujoco.mjtObj.__members__
+                if name.startswith("mjOBJ_")
+            )
+            raise ValueError(f"unknown object type {object_type!r}; expected one of {known}")
+        return mujoco.mjtObj.__members__[member]
+    return mujoco.mjtObj(int(object_type))
+
+
+def _flag_bits(flags, enum_type, prefix: str) -> int:
+    """OR of option flags given as lowercase names ('gravity') or enum values."""
+    bits = 0
+    for flag in flags:
+        if isinstance(flag, str):
+            member = f"{prefix}{flag.upper()}"
+            if member not in enum_type.__members__:
+                known = sorted(
+                    name[len(prefix) :].lower()
+                    for name in enum_type.__members__
+                    if name.startswith(prefix) and not name.endswith("NDISABLE")
+                )
+                raise ValueError(f"unknown flag {flag!r}; expected one of {known}")
+            bits |= int(enum_type.__members__[member])
+        else:
+            bits |= int(flag)
+    return bits
+
+
+@contextlib.contextmanager
+def flags_set(opt, field: str, bits: int) -> Iterator[None]:
+    """Sets `bits` in option field `field` ('disableflags' or 'enableflags') while active."""
+    previous = getattr(opt, field)
+    setattr(opt, field, previous | bits)
+    try:
+        yield
+    finally:
+        setattr(opt, field, previous)
+
+
+class _StructWrapper:
+    """Forwards attribute access to a MuJoCo struct and caches its fixed-size arrays."""
+
+    _cacheable: frozenset = frozenset()
+
+    def __init__(self, ptr):
+        object.__setattr__(self, "_ptr", ptr)
+
+    @property
+    def ptr(self):
+        """The wrapped ``mujoco`` object, for passing to ``mujoco.mj_*`` functions."""
+        return self._ptr
+
+    def __getattr__(self, name):
+        if name == "_ptr":
+            raise AttributeError(name)
+        value = getattr(self._ptr, name)
+        if name in self._cacheable:
+            self.__dict__[name] = value
+        return value
+
+    def __setattr__(self, name, value):
+        self.__dict__.pop(name, None)
+        setattr(self._ptr, name, value)
+
+    def __dir__(self):
+        return sorted(set(super().__dir__()) | set(dir(self._ptr)))
+
+
+def _static_data_fields() -> frozenset:
+    """MjData arrays whose size is fixed by model counts (not by contacts or constraints)."""
+    return frozenset(
+        name
+        for name, extent in field_layout.DATA_EXTENTS.items()
+        if hasattr(mujoco.MjModel, extent[0])
+    )
+
+
+class MjModel(_StructWrapper):
+    """A ``mujoco.MjModel`` with dm_control's helpers: ``ptr``, ``name2id``, ``disable``.
+
+    ``MjModel(model)`` wraps a ``mujoco.MjModel``; the ``from_*`` constructors load one.
+    """
+
+    _cacheable = frozenset(field_layout.MODEL_EXTENTS) | {"opt", "vis", "stat"}
+
+    @classmethod
+    def from_xml_string(cls, xml_string: str, assets: dict | None = None) -> "MjModel":
+        """Compiles MJCF (or URDF) text; ``assets`` maps file names used in it to bytes.
+
+        Raises:
+          Error: when MuJoCo cannot compile it (MuJoCo's message).
+        """
+        return cls(_load(mujoco.MjModel.from_xml_string, xml_string, assets=assets))
+
+    @classmethod
+    def from_xml_path(cls, xml_path: str) -> "MjModel":
+        """Compiles the MJCF or URDF file at ``xml_path``."""
+        return cls(_load(mujoco.MjModel.from_xml_path, str(xml_path)))
+
+    @classmethod
+    def from_binary_path(cls, binary_path: str) -> "MjModel":
+        """Loads the MJB model file at ``binary_path``."""
+        return cls(_load(mujoco.MjModel.from_binary_path, str(binary_path)))
+
+    @classmethod
+    def from_byte_string(cls, byte_string: bytes) -> "MjModel":
+        """Loads a model from MJB bytes (what ``to_bytes`` returns).
+
+        Raises:
+          Error: if ``byte_string`` is not a model binary this MuJoCo can load.
+        """
+        try:
+            model = mujoco.MjModel.from_binary_path(_MJB_NAME, {_MJB_NAME: bytes(byte_string)})
+        except ValueError as error:
+            raise Error(
+                f"byte_string ({len(byte_string)} bytes) is not a MuJoCo model binary (MJB) "
+                f"that this MuJoCo can load: {error}"
+            ) from None
+        return cls(model)
+
+    def to_bytes(self) -> bytes:
+        """The model as MJB bytes."""
+        buffer = np.empty(mujoco.mj_sizeModel(self._ptr), dtype=np.uint8)
+        mujoco.mj_saveModel(self._ptr, None, buffer)
+        return buffer.tobytes()
+
+    def save_binary(self, binary_path: str) -> None:
+        """Writes the model as an MJB file."""
+        mujoco.mj_saveModel(self._ptr, str(binary_path), None)
+
+    def copy(self) -> "MjModel":
+        """A deep copy of the model."""
+        return self.__copy__()
+
+    def __copy__(self) -> "MjModel":
+        return type(self)(copy.copy(self._ptr))
+
+    def __getstate__(self):
+        return self._ptr
+
+    def __setstate__(self, state) -> None:
+        object.__setattr__(self, "_ptr", state)
+
+    def free(self) -> None:
+        """Drops the reference to the MuJoCo model (freed once nothing else holds it)."""
+        self.__dict__.clear()
+        object.__setattr__(self, "_ptr", None)
+
+    @property
+    def name(self) -> str:
+        """The model's name (``<mujoco model=...>``): the first string in ``names``."""
+        names = bytes(self._ptr.names)
+        return names[: names.index(b"\0")].decode()
+
+    def name2id(self, name: str, object_type) -> int:
+        """The id of the object of ``object_type`` ('geom', 'body', ...) called ``name``.
+
+        Raises:
+          ValueError: if there is no such object.
+        """
+        obj_type = _object_type(object_type)
+        object_id = mujoco.mj_name2id(self._ptr, obj_type, name)
+        if object_id == -1:
+            type_name = obj_type.name[len("mjOBJ_") :].lower()
+            raise ValueError(f"Object of type {type_name!r} with name {name!r} does not exist.")
+        return object_id
+
+    def id2name(self, object_id: int, object_type) -> str:
+        """The name of object ``object_id`` of ``object_type``; '' when it has none."""
+        return mujoco.mj_id2name(self._ptr, _object_type(object_type), object_id) or ""
+
+    def disable(self, *flags) -> contextlib.AbstractContextManager[None]:
+        """Temporarily sets MuJoCo disable flags ('gravity', 'contact', 'actuation', ...)."""
+        bits = _flag_bits(flags, mujoco.mjtDisableBit, _DISABLE_PREFIX)
+        return flags_set(self._ptr.opt, "disableflags", bits)
+
+    def enable(self, *flags) -> contextlib.AbstractContextManager[None]:
+        """Temporarily sets MuJoCo enable flags ('energy', 'multiccd', ...)."""
+        bits = _flag_bits(flags, mujoco.mjtEnableBit, _ENABLE_PREFIX)
+        return flags_set(self._ptr.opt, "enableflags", bits)
+
+    def __repr__(self):
+        return f"MjModel(nbody={self._ptr.nbody}, ngeom={self._ptr.ngeom}, nq={self._ptr.nq})"
+
+
+class MjData(_StructWrapper):
+    """A ``mujoco.MjData`` with dm_control's ``ptr``, a wrapped ``model`` and helpers.
+
+    ``MjData(model)`` allocates data for a wrapped ``MjModel``; ``MjData(data)`` wraps a
+    ``mujoco.MjData``.
+    """
+
+    _cacheable = _static_data_fields()
+
+    def __init__(self, model_or_data: "MjModel | mujoco.MjData"):
+        if isinstance(model_or_data, MjModel):
+            model, data = model_or_data, mujoco.MjData(model_or_data.ptr)
+        elif isinstance(model_or_data, mujoco.MjData):
+            model, data = MjModel(model_or_data.model), model_or_data
+        else:
+            raise TypeError(
+                "MjData expects a wrapper.MjModel or a mujoco.MjData, got "
+                f"{type(model_or_data).__name__}"
+            )
+        super().__init__(data)
+        object.__setattr__(self, "_model", model)
+
+    @property
+    def model(self) -> MjModel:
+        """The wrapped model this data belongs to."""
+        return self._model
+
+    def copy(self) -> "MjData":
+        """A copy of the data sharing this model."""
+        return self.__copy__()
+
+    def __copy__(self) -> "MjData":
+        return self._make_copy(share_model=True)
+
+    def _make_copy(self, share_model: bool) -> "MjData":
+        return type(self)((copy.copy if share_model else copy.deepcopy)(self._ptr))
+
+    def __getstate__(self):
+        return self._ptr
+
+    def __setstate__(self, state) -> None:
+        object.__setattr__(self, "_ptr", state)
+        object.__setattr__(self, "_model", MjModel(state.model))
+
+    def object_velocity(self, object_id, object_type, local_frame: bool = False) -> np.ndarray:
+        """The (linear, angular) velocity of an object, as a (2, 3) array.
+
+        Args:
+          object_id: the object's id or name.
+          object_type: 'body', 'geom', 'site', ... or an ``mjtObj`` value.
+          local_frame: whether to express it in the object's frame instead of the world's.
+        """
+        obj_type = _object_type(object_type)
+        if isinstance(object_id, str):
+            object_id = self._model.name2id(object_id, obj_type)
+        velocity = np.empty(6)
+        mujoco.mj_objectVelocity(
+            self._model.ptr, self._ptr, obj_type, object_id, velocity, int(local_frame)
+        )
+        # MuJoCo gives (angular, linear).
+        return velocity.reshape(2, 3)[::-1]
+
+    def contact_force(self, contact_id: int) -> np.ndarray:
+        """The wrench of contact ``contact_id`` in its frame: (force, torque) as (2, 3).
+
+        Raises:
+          ValueError: if ``contact_id`` is not in [0, ncon).
+        """
+        ncon = self._ptr.ncon
+        if not 0 <= contact_id < ncon:
+            raise ValueError(f"contact_id {contact_id} is out of range: expected 0 to {ncon - 1}")
+        # The parts of mj_step2 that the constraint forces depend on.
+        mujoco.mj_fwdActuation(self._model.ptr, self._ptr)
+        mujoco.mj_fwdAcceleration(self._model.ptr, self._ptr)
+        mujoco.mj_fwdConstraint(self._model.ptr, self._ptr)
+        wrench = np.empty(6)
+        mujoco.mj_contactForce(self._model.ptr, self._ptr, contact_id, wrench)
+        return wrench.reshape(2, 3)
+
+    @property
+    def contact(self):
+        """The active contacts (the first ``ncon`` of the contact buffer)."""
+        return self._ptr.contact[: self._ptr.ncon]
+
+    def __repr__(self):
+        return f"MjData(time={self._ptr.time}, ncon={self._ptr.ncon})"
+
+
+def _load(loader: Callable, *args, **kwargs) -> mujoco.MjModel:
+    try:
+        return loader(*args, **kwargs)
+    except ValueError as error:
+        raise Error(str(error)) from None
+
+
+def set_callback(name: str, new_callback=None) -> None:
+    """Sets MuJoCo's global callback ``name`` ('mjcb_passive', 'mjcb_control', ...);
+    None removes it."""
+    setter = getattr(mujoco, f"set_{name}", None)
+    if setter is None:
+        known = sorted(n[len("set_") :] for n in dir(mujoco) if n.startswith("set_mjcb_"))
+        raise ValueError(f"unknown MuJoCo callback {name!r}; expected one of {known}")
+    setter(new_callback)
+
+
+@contextlib.contextmanager
+def callback_context(name: str, new_callback=None) -> Iterator[None]:
+    """Sets callback ``name`` inside the block and restores the previous one after."""
+    previous = getattr(mujoco, f"get_{name}")()
+    set_callback(name, new_callback)
+    try:
+        yield
+    finally:
+        set_callback(name, previous)
+
+
+def enable_timer(enabled: bool = True) -> None:
+    """Turns MuJoCo's profiling timers (``data.timer``) on or off."""
+    set_callback("mjcb_time", time.time if enabled else None)
+
+
+def get_schema() -> str:
+    """MuJoCo's MJCF schema as text (``mj_printSchema``)."""
+    return mujoco.mj_printSchema(False, False)
+
+
+def save_last_parsed_model_to_xml(xml_path: str, check_model: MjModel | None = None) -> None:
+    """Writes the model MuJoCo parsed last (from XML) to ``xml_path``."""
+    mujoco.mj_saveLastXML(str(xml_path), getattr(check_model, "ptr", check_model))
+
+
+class MjvCamera(mujoco.MjvCamera):
+    """``mujoco.MjvCamera`` with dm_control's ``ptr``."""
+
+    @property
+    def ptr(self) -> "MjvCamera":
+        return self
+
+
+class MjvOption(mujoco.MjvOption):
+    """``mujoco.MjvOption`` with dm_control's ``ptr``."""
+
+    @property
+    def ptr(self) -> "MjvOption":
+        return self
+
+
+class MjvPerturb(mujoco.MjvPerturb):
+    """``mujoco.MjvPerturb`` with dm_control's ``ptr``."""
+
+    @property
+    def ptr(self) -> "MjvPerturb":
+        return self
+
+
+class MjvFigure(mujoco.MjvFigure):
+    """``mujoco.MjvFigure`` with dm_control's ``ptr``."""
+
+    @property
+    def ptr(self) -> "MjvFigure":
+        return self
+
+
+class MjvScene(mujoco.MjvScene):
+    """``mujoco.MjvScene`` for a wrapped model, with dm_control's ``ptr`` and ``free``."""
+
+    def __init__(self, model: MjModel | None = None, max_geom: int = 1000):
+        if model is None:
+            super().__init__()
+        else:
+            super().__init__(getattr(model, "ptr", model), max_geom)
+
+    @property
+    def ptr(self) -> "MjvScene":
+        return self
+
+    def free(self) -> None:
+        """Nothing to do: the scene's memory goes with the object."""
+
+
+class MjrContext(mujoco.MjrContext):
+    """``mujoco.MjrContext`` with dm_control's ``ptr``; needs a current OpenGL context."""
+
+    def __init__(
+        self, model: MjModel, gl_context=None, font_scale=mujoco.mjtFontScale.mjFONTSCALE_150
+    ):
+        super().__init__(getattr(model, "ptr", model), font_scale)
+
+    @property
+    def ptr(self) -> "MjrContext":
+        return self
