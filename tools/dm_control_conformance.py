@@ -1,18 +1,24 @@
-"""Runs dm_control 1.0.50's own composer/mjcf/entities tests and manipulation suite here.
+"""Runs dm_control 1.0.50's own tests, suite, manipulation and locomotion tasks here.
 
-Usage: ``python tools/dm_control_conformance.py [--floor 0.99] [--tasks-only | --tests-only]``
+Usage: ``python tools/dm_control_conformance.py [--floor 0.99] [--tasks-only | --tests-only]
+[--packages composer mjcf ...]``
 
 Builds a scratch venv under ``.cache/dm_control_conformance`` with this project and
-``dm-control==1.0.50`` installed from PyPI, copies dm_control's public ``composer`` and
-``mjcf`` test files, and those of the ``entities`` (props, arms, hands) that its manipulation
-suite is built from, out of that install (nothing of dm_control is kept in the repository),
-and runs them with ``dm_control.composer`` / ``dm_control.mjcf`` served by this project
-through ``composer.dm_control_compat``. Exception types are checked, message wording is not.
-It then loads every ``dm_control.manipulation`` ``*_features`` task and ``reach_site_vision``
-through the same redirect and runs each for a reset and 100 random steps.
+``dm-control==1.0.50`` installed from PyPI, copies the test files of dm_control's
+``composer``, ``mjcf``, ``entities``, ``suite``, ``mujoco``, ``rl`` and ``locomotion``
+packages out of that install (nothing of dm_control is kept in the repository), and runs
+them with ``dm_control.composer`` / ``dm_control.mjcf`` / ``dm_control.mujoco`` served by
+this project through ``composer.dm_control_compat``. Exception types are checked, message
+wording is not. It then loads every ``dm_control.manipulation`` ``*_features`` task and
+``reach_site_vision``, every task of ``suite.ALL_TASKS`` (and renders a frame of each), the
+environments of ``locomotion.examples.basic_cmu_2019`` / ``basic_rodent_2020`` and
+``soccer.load(team_size=2)`` through the same redirect, from a working directory of its
+own, and runs each for a reset and 100 random steps (actions uniform within the action
+spec's bounds, within [-1, 1] where a bound is MuJoCo's "unbounded" 1e10).
 
-Prints a per-file table, the failing test ids, a per-task table and the totals; exits 1 when
-the test pass rate is below ``--floor`` or a task fails.
+Prints a per-file table with subtotals per package, the failing test ids with the known
+reasons, a per-task table and the totals; exits 1 when the test pass rate is below
+``--floor`` or a task fails.
 """
 
 from __future__ import annotations
@@ -34,9 +40,10 @@ CACHE = scratch_venv.CACHE / "dm_control_conformance"
 DM_CONTROL_VERSION = "1.0.50"
 TEST_EXTRAS = ["mock", "pytest"]
 
-#: dm_control packages whose test files are run: the two this project serves, and the
-#: entities built on them that dm_control's manipulation suite uses.
-TESTED_PACKAGES = ("composer", "mjcf", "entities")
+#: dm_control packages whose test files are run: the three this project serves, and the
+#: packages built on them (entities of the manipulation suite, the Control Suite, its RL
+#: environment and locomotion).
+TESTED_PACKAGES = ("composer", "mjcf", "entities", "suite", "mujoco", "rl", "locomotion")
 
 #: Test files that check dm_control's own internals (its copied schema, its attribute
 #: classes, its debug mode), not behaviour that users rely on.
@@ -52,6 +59,7 @@ EXCLUDED_TEST_FILES = {
 HELPER_MODULES = {
     "dm_control.composer.hooks_test_utils": "composer/hooks_test_utils.py",
     "dm_control.composer.observation.fake_physics": "composer/observation/fake_physics.py",
+    "dm_control.mujoco.testing": "mujoco/testing/__init__.py",
 }
 
 EPISODE_STEPS = 100
@@ -91,8 +99,11 @@ dm_control_compat.install()
 import dm_control  # noqa: E402  (the real package, after the redirect)
 
 for _name, _relative in {helpers!r}.items():
+    _path = dm_control.__path__[0] + "/" + _relative
+    # A package (testing/__init__.py) finds its submodules in its own folder.
+    _folder = [_path.rsplit("/", 1)[0]] if _path.endswith("/__init__.py") else None
     _spec = importlib.util.spec_from_file_location(
-        _name, dm_control.__path__[0] + "/" + _relative
+        _name, _path, submodule_search_locations=_folder
     )
     _module = importlib.util.module_from_spec(_spec)
     sys.modules[_name] = _module
@@ -117,27 +128,56 @@ absltest.TestCase.assertRaisesWithPredicateMatch = _raises_type_only
 '''
 
 _TASK_RUNNER = """
-import json, sys, time
+import functools, inspect, json, sys, time
 import numpy as np
 from composer import dm_control_compat
 dm_control_compat.install()
-from dm_control import manipulation
-names = sorted(n for n in manipulation.ALL if n.endswith("_features")) + ["reach_site_vision"]
+from dm_control import manipulation, suite
+from dm_control.locomotion import soccer
+from dm_control.locomotion.examples import basic_cmu_2019, basic_rodent_2020
+
+def _loaders():
+    for name in sorted(n for n in manipulation.ALL if n.endswith("_features")):
+        yield "manipulation", name, functools.partial(manipulation.load, name, seed=0)
+    yield "manipulation", "reach_site_vision", functools.partial(
+        manipulation.load, "reach_site_vision", seed=0)
+    for domain, task in suite.ALL_TASKS:
+        yield "suite", f"{domain}-{task}", functools.partial(
+            suite.load, domain, task, task_kwargs={"random": 0})
+    for module in (basic_cmu_2019, basic_rodent_2020):
+        for name, function in inspect.getmembers(module, inspect.isfunction):
+            if function.__module__ == module.__name__ and not name.startswith("_"):
+                yield "locomotion", name, functools.partial(function, random_state=0)
+    yield "locomotion", "soccer_team_size_2", functools.partial(
+        soccer.load, team_size=2, random_state=0)
+
+def _random_action(rng, spec):
+    # MuJoCo's "unbounded" is 1e10: uniform actions there blow any model up.
+    low = np.where(np.abs(spec.minimum) < 1e9, spec.minimum, -1.0)
+    high = np.where(np.abs(spec.maximum) < 1e9, spec.maximum, 1.0)
+    return rng.uniform(low, high, spec.shape).astype(spec.dtype)
+
 results = {}
-for name in names:
+for group, name, load in _loaders():
     try:
-        env = manipulation.load(name, seed=0)
-        spec = env.action_spec()
-        rng = np.random.RandomState(0)
         start = time.perf_counter()
+        env = load()
+        specs = env.action_spec()
+        rng = np.random.RandomState(0)
         env.reset()
         for _ in range(int(sys.argv[1])):
-            timestep = env.step(rng.uniform(spec.minimum, spec.maximum))
+            if isinstance(specs, list):
+                action = [_random_action(rng, spec) for spec in specs]
+            else:
+                action = _random_action(rng, specs)
+            timestep = env.step(action)
             if timestep.last():
                 env.reset()
-        results[name] = {"ok": True, "seconds": time.perf_counter() - start}
+        if group == "suite":
+            env.physics.render(height=48, width=64, camera_id=0)
+        results[name] = {"group": group, "ok": True, "seconds": time.perf_counter() - start}
     except Exception as e:  # report every task, whatever fails
-        results[name] = {"ok": False, "error": f"{type(e).__name__}: {e}"[:300]}
+        results[name] = {"group": group, "ok": False, "error": f"{type(e).__name__}: {e}"[:300]}
 print("RESULTS" + json.dumps(results))
 """
 
@@ -151,8 +191,8 @@ class FileResult(NamedTuple):
     skipped: int
 
 
-def copy_tests(python: Path) -> Path:
-    """Copies dm_control's composer/mjcf/entities test files and assets out of the venv."""
+def copy_tests(python: Path, packages: tuple[str, ...] = TESTED_PACKAGES) -> Path:
+    """Copies the test files and test assets of dm_control's ``packages`` out of the venv."""
     location = subprocess.run(
         [
             str(python),
@@ -167,7 +207,7 @@ def copy_tests(python: Path) -> Path:
     source = Path(location)
     destination = CACHE / "tests"
     shutil.rmtree(destination, ignore_errors=True)
-    for package in TESTED_PACKAGES:
+    for package in packages:
         for path in (source / package).rglob("*"):
             relative = path.relative_to(source).as_posix()
             is_test = path.name.endswith("_test.py") and relative not in EXCLUDED_TEST_FILES
@@ -232,14 +272,17 @@ def _display_path(path: str) -> str:
 
 
 def run_tasks(python: Path) -> dict:
-    """Loads and steps the manipulation tasks in the venv; returns name -> result."""
+    """Loads and steps the environments in the venv, from an empty working directory of
+    their own (asset paths must not depend on it); returns name -> result."""
     env = dict(os.environ, MUJOCO_GL=os.environ.get("MUJOCO_GL", "egl"))
+    workdir = CACHE / "task-workdir"
+    workdir.mkdir(exist_ok=True)
     completed = subprocess.run(
         [str(python), "-c", _TASK_RUNNER, str(EPISODE_STEPS)],
         capture_output=True,
         text=True,
         env=env,
-        cwd=CACHE,
+        cwd=workdir,
     )
     for line in completed.stdout.splitlines():
         if line.startswith("RESULTS"):
@@ -265,7 +308,8 @@ def print_test_table(results: list[FileResult], failing: list[str]) -> float:
         print(f"{r.path:<{width}}  {r.passed:6d}  {r.failed:6d}  {r.skipped:7d}")
     for package in TESTED_PACKAGES:
         in_package = [r for r in results if r.path.startswith(package + "/")]
-        _subtotal(f"total {package}", in_package, width)
+        if in_package:
+            _subtotal(f"total {package}", in_package, width)
     rate = _subtotal("total", results, width)
     if failing:
         print("\nfailing tests:")
@@ -276,13 +320,16 @@ def print_test_table(results: list[FileResult], failing: list[str]) -> float:
 
 
 def print_task_table(results: dict) -> int:
-    print(f"\n{'dm_control.manipulation task':<45} result")
-    for name, result in results.items():
-        text = f"ok ({result['seconds']:.1f} s)" if result["ok"] else f"FAIL {result['error']}"
-        print(f"{name:<45} {text}")
-    ok = sum(r["ok"] for r in results.values())
-    print(f"{'total':<45} {ok} of {len(results)} reset and ran {EPISODE_STEPS} steps")
-    return len(results) - ok
+    """Prints each environment's result, grouped by package; returns how many failed."""
+    for group in dict.fromkeys(r["group"] for r in results.values()):
+        in_group = {name: r for name, r in results.items() if r["group"] == group}
+        print(f"\n{'dm_control.' + group + ' environment':<45} result")
+        for name, result in in_group.items():
+            text = f"ok ({result['seconds']:.1f} s)" if result["ok"] else f"FAIL {result['error']}"
+            print(f"{name:<45} {text}")
+        ok = sum(r["ok"] for r in in_group.values())
+        print(f"{'total ' + group:<45} {ok} of {len(in_group)} reset and ran {EPISODE_STEPS} steps")
+    return sum(not r["ok"] for r in results.values())
 
 
 def main() -> int:
@@ -290,6 +337,9 @@ def main() -> int:
     parser.add_argument("--floor", type=float, default=0.0, help="minimum test pass rate")
     parser.add_argument("--tests-only", action="store_true")
     parser.add_argument("--tasks-only", action="store_true")
+    parser.add_argument(
+        "--packages", nargs="+", choices=TESTED_PACKAGES, default=list(TESTED_PACKAGES)
+    )
     args = parser.parse_args()
     CACHE.mkdir(parents=True, exist_ok=True)
     python = scratch_venv.ensure_venv(
@@ -297,7 +347,7 @@ def main() -> int:
     )
     status = 0
     if not args.tasks_only:
-        results, failing = run_tests(python, copy_tests(python))
+        results, failing = run_tests(python, copy_tests(python, tuple(args.packages)))
         rate = print_test_table(results, failing)
         if rate < args.floor:
             print(f"pass rate {rate:.1%} is below the floor {args.floor:.1%}")

@@ -1,4 +1,4 @@
-"""The dm_control import redirect serves dm_control.composer/mjcf from this project.
+"""The dm_control import redirect serves dm_control.composer/mjcf/mujoco from this project.
 
 Each test runs in a fresh interpreter: the redirect changes the process's import system.
 """
@@ -47,6 +47,68 @@ def test_dm_control_names_are_this_projects_modules_after_install():
         "True True True True",
         "composer composer.observation.observable",
     ]
+
+
+def test_dm_control_mujoco_is_the_engine_package_after_install():
+    result = _run_python(
+        textwrap.dedent(
+            """
+            from composer import dm_control_compat
+            dm_control_compat.install()
+            from dm_control import mujoco
+            from dm_control.mujoco.wrapper.mjbindings import enums, mjlib
+            import mujoco_physics
+            physics = mujoco.Physics.from_xml_string("<mujoco><worldbody><body>"
+                "<joint name='j'/><geom size='.1'/></body></worldbody></mujoco>")
+            print(mujoco is mujoco_physics, type(physics).__module__)
+            print(enums.mjtJoint.mjJNT_HINGE, mjlib.mj_step is mujoco.mj_step)
+            """
+        )
+    )
+    assert result.returncode == 0, result.stderr
+    assert result.stdout.split("\n")[:2] == ["True mujoco_physics.engine", "3 True"]
+
+
+def test_rl_control_physics_error_of_an_installed_dm_control_is_ours(tmp_path):
+    # A stand-in for an installed dm_control whose rl.control defines its own error and
+    # catches it in reset_context, as dm_control's does.
+    package = tmp_path / "dm_control"
+    (package / "rl").mkdir(parents=True)
+    (package / "__init__.py").write_text("")
+    (package / "rl" / "__init__.py").write_text("")
+    (package / "rl" / "control.py").write_text(
+        textwrap.dedent(
+            """
+            class PhysicsError(RuntimeError):
+                pass
+
+            def run_catching(function):
+                try:
+                    function()
+                except PhysicsError as error:
+                    return f"caught {type(error).__module__}"
+            """
+        )
+    )
+    result = _run_python(
+        textwrap.dedent(
+            f"""
+            import sys
+            sys.path.insert(0, {str(tmp_path)!r})
+            from composer import dm_control_compat
+            dm_control_compat.install()
+            from dm_control.rl import control
+            import mujoco_physics
+            physics = mujoco_physics.Physics.from_xml_string("<mujoco><worldbody><body>"
+                "<freejoint/><geom size='.1'/></body></worldbody></mujoco>")
+            physics.data.qvel[:] = float("inf")
+            print(control.PhysicsError is mujoco_physics.PhysicsError)
+            print(control.run_catching(physics.step))
+            """
+        )
+    )
+    assert result.returncode == 0, result.stderr
+    assert result.stdout.split("\n")[:2] == ["True", "caught mujoco_physics.engine"]
 
 
 def test_model_built_through_dm_control_names_compiles_and_binds():
