@@ -111,9 +111,14 @@ class DmControlRedirect(importlib.abc.MetaPathFinder):
         target_name = _target_name(fullname)
         if target_name is None:
             return None
-        if importlib.util.find_spec(target_name) is None:
+        try:
+            target_spec = importlib.util.find_spec(target_name)
+        except ModuleNotFoundError:
+            # A parent this project does not have (a dm_control module registered by hand
+            # under a served package): let the other finders look.
             return None
-        target_spec = importlib.util.find_spec(target_name)
+        if target_spec is None:
+            return None
         return importlib.machinery.ModuleSpec(
             fullname,
             _AliasLoader(target_name),

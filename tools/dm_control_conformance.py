@@ -38,7 +38,7 @@ import scratch_venv  # noqa: E402
 
 CACHE = scratch_venv.CACHE / "dm_control_conformance"
 DM_CONTROL_VERSION = "1.0.50"
-TEST_EXTRAS = ["mock", "pytest"]
+TEST_EXTRAS = ["mock", "pytest", "pillow"]
 
 #: dm_control packages whose test files are run: the three this project serves, and the
 #: packages built on them (entities of the manipulation suite, the Control Suite, its RL

@@ -156,6 +156,11 @@ class MjModel(_StructWrapper):
             ) from None
         return cls(model)
 
+    @property
+    def _model(self) -> mujoco.MjModel:
+        # dm_control's attribute name for the wrapped struct, which code reaches for.
+        return self._ptr
+
     def to_bytes(self) -> bytes:
         """The model as MJB bytes."""
         buffer = np.empty(mujoco.mj_sizeModel(self._ptr), dtype=np.uint8)
@@ -247,6 +252,11 @@ class MjData(_StructWrapper):
     def model(self) -> MjModel:
         """The wrapped model this data belongs to."""
         return self._model
+
+    @property
+    def _data(self) -> mujoco.MjData:
+        # dm_control's attribute name for the wrapped struct, which code reaches for.
+        return self._ptr
 
     def copy(self) -> "MjData":
         """A copy of the data sharing this model."""
