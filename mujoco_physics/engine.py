@@ -25,8 +25,12 @@ _RK4 = int(mujoco.mjtIntegrator.mjINT_RK4)
 _ACTUATION_DISABLED = int(mujoco.mjtDisableBit.mjDSBL_ACTUATION)
 _STATE_SIGNATURE = int(mujoco.mjtState.mjSTATE_PHYSICS)
 _STATE_SIGNATURE_WITH_PLUGINS = _STATE_SIGNATURE | int(mujoco.mjtState.mjSTATE_PLUGIN)
-# The name under which MJB bytes are handed to MuJoCo in a one-file virtual file system.
-_MJB_NAME = "model.mjb"
+# Message formats, under the names dm_control's tests read them from.
+_INVALID_PHYSICS_STATE = "Physics state is invalid. Warning(s) raised: {warning_names}"
+_KEYFRAME_ID_OUT_OF_RANGE = "keyframe_id {actual} is out of range: expected 0 to {max_valid}"
+# The MjData arrays of the default state, in mj_getState's order; those after the first
+# three only where the model has them (a release without the array never has them).
+_STATE_ARRAYS = ("qpos", "qvel", "act", "history", "plugin_state", "plastic")
 
 
 def _log_mujoco_warning(message: str) -> None:
@@ -76,7 +80,7 @@ class _Simulation:
         raised = [name for name, grew in zip(_WARNING_NAMES, self.warnings > previous) if grew]
         if not raised:
             return
-        message = f"Physics state is invalid. Warning(s) raised: {', '.join(raised)}"
+        message = _INVALID_PHYSICS_STATE.format(warning_names=", ".join(raised))
         if self.raise_on_warnings:
             raise PhysicsError(message)
         logging.warning(message)
@@ -248,8 +252,9 @@ class Physics:
         else:
             if not 0 <= keyframe_id < sim.model.nkey:
                 raise ValueError(
-                    f"keyframe_id {keyframe_id} is out of range: the model has "
-                    f"{sim.model.nkey} keyframe(s)"
+                    _KEYFRAME_ID_OUT_OF_RANGE.format(
+                        actual=keyframe_id, max_valid=sim.model.nkey - 1
+                    )
                 )
             mujoco.mj_resetDataKeyframe(sim.model, sim.data, keyframe_id)
         self.after_reset()
@@ -339,6 +344,13 @@ class Physics:
         state = np.empty(size)
         mujoco.mj_getState(self._sim.model, self._sim.data, state, signature)
         return state
+
+    def _physics_state_items(self) -> list[np.ndarray]:
+        """The MjData arrays that ``get_state()`` concatenates: qpos, qvel, act, then actuator
+        history, plugin state and plasticity where the model has them."""
+        data = self._sim.data
+        arrays = [getattr(data, name, None) for name in _STATE_ARRAYS]
+        return arrays[:3] + [a for a in arrays[3:] if a is not None and a.size]
 
     def state(self) -> np.ndarray:
         """Same as ``get_state()``."""

@@ -54,6 +54,10 @@ EXCLUDED_TEST_FILES = {
     "mjcf/code_for_debugging_test.py",
 }
 
+#: Folders of files that tests read relative to their own file (``suite/demos`` holds the
+#: motion-capture sample of ``parse_amc_test``).
+ASSET_FOLDERS = {"test_assets", "demos"}
+
 #: dm_control test helpers that its tests import under dm_control's names: they are
 #: served from dm_control's own files, not from this project.
 HELPER_MODULES = {
@@ -211,7 +215,7 @@ def copy_tests(python: Path, packages: tuple[str, ...] = TESTED_PACKAGES) -> Pat
         for path in (source / package).rglob("*"):
             relative = path.relative_to(source).as_posix()
             is_test = path.name.endswith("_test.py") and relative not in EXCLUDED_TEST_FILES
-            is_asset = "test_assets" in path.parts and path.is_file()
+            is_asset = bool(ASSET_FOLDERS.intersection(path.parts)) and path.is_file()
             if is_test or is_asset:
                 # Renamed so that the copies never shadow the `composer`/`mjcf` packages.
                 target = destination / f"dm_control_{relative}"

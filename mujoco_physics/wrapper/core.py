@@ -10,6 +10,7 @@ instance-dictionary hits and return the same NumPy view.
 import contextlib
 import copy
 import time
+import weakref
 from collections.abc import Callable, Iterator
 
 import mujoco
@@ -26,6 +27,16 @@ class Error(ValueError):
     ``wrapper.Error``; a ValueError, as MuJoCo's own loaders raise)."""
 
 
+# Message formats, under the names dm_control's tests read them from.
+_CONTACT_ID_OUT_OF_RANGE = "contact_id {actual} is out of range: expected 0 to {max_valid}"
+_NOT_LAST_PARSED_ERROR = (
+    "check_model is not the model MuJoCo parsed last: only that one can be saved as XML"
+)
+
+# The model MuJoCo parsed from XML last (mj_saveLastXML writes that one), while it lives.
+_last_parsed = None
+
+
 _DISABLE_PREFIX = "mjDSBL_"
 _ENABLE_PREFIX = "mjENBL_"
 
@@ -40,7 +51,7 @@ def _object_type(object_type) -> mujoco.mjtObj:
                 for name in mujoco.mjtObj.__members__
                 if name.startswith("mjOBJ_")
             )
-            raise ValueError(f"unknown object type {object_type!r}; expected one of {known}")
+            raise Error(f"unknown object type {object_type!r}; expected one of {known}")
         return mujoco.mjtObj.__members__[member]
     return mujoco.mjtObj(int(object_type))
 
@@ -60,6 +71,9 @@ def _flag_bits(flags, enum_type, prefix: str) -> int:
                 raise ValueError(f"unknown flag {flag!r}; expected one of {known}")
             bits |= int(enum_type.__members__[member])
         else:
+            valid = {int(value) for value in enum_type.__members__.values()}
+            if int(flag) not in valid:
+                raise ValueError(f"unknown flag {flag!r}; expected one of {sorted(valid)}")
             bits |= int(flag)
     return bits
 
@@ -128,12 +142,12 @@ class MjModel(_StructWrapper):
         Raises:
           Error: when MuJoCo cannot compile it (MuJoCo's message).
         """
-        return cls(_load(mujoco.MjModel.from_xml_string, xml_string, assets=assets))
+        return cls(_parse(mujoco.MjModel.from_xml_string, xml_string, assets=assets))
 
     @classmethod
     def from_xml_path(cls, xml_path: str) -> "MjModel":
         """Compiles the MJCF or URDF file at ``xml_path``."""
-        return cls(_load(mujoco.MjModel.from_xml_path, str(xml_path)))
+        return cls(_parse(mujoco.MjModel.from_xml_path, str(xml_path)))
 
     @classmethod
     def from_binary_path(cls, binary_path: str) -> "MjModel":
@@ -205,7 +219,7 @@ class MjModel(_StructWrapper):
         object_id = mujoco.mj_name2id(self._ptr, obj_type, name)
         if object_id == -1:
             type_name = obj_type.name[len("mjOBJ_") :].lower()
-            raise ValueError(f"Object of type {type_name!r} with name {name!r} does not exist.")
+            raise Error(f"Object of type {type_name!r} with name {name!r} does not exist.")
         return object_id
 
     def id2name(self, object_id: int, object_type) -> str:
@@ -301,7 +315,7 @@ class MjData(_StructWrapper):
         """
         ncon = self._ptr.ncon
         if not 0 <= contact_id < ncon:
-            raise ValueError(f"contact_id {contact_id} is out of range: expected 0 to {ncon - 1}")
+            raise ValueError(_CONTACT_ID_OUT_OF_RANGE.format(actual=contact_id, max_valid=ncon - 1))
         # The parts of mj_step2 that the constraint forces depend on.
         mujoco.mj_fwdActuation(self._model.ptr, self._ptr)
         mujoco.mj_fwdAcceleration(self._model.ptr, self._ptr)
@@ -324,6 +338,13 @@ def _load(loader: Callable, *args, **kwargs) -> mujoco.MjModel:
         return loader(*args, **kwargs)
     except ValueError as error:
         raise Error(str(error)) from None
+
+
+def _parse(loader: Callable, *args, **kwargs) -> mujoco.MjModel:
+    global _last_parsed
+    model = _load(loader, *args, **kwargs)
+    _last_parsed = weakref.ref(model)
+    return model
 
 
 def set_callback(name: str, new_callback=None) -> None:
@@ -358,8 +379,16 @@ def get_schema() -> str:
 
 
 def save_last_parsed_model_to_xml(xml_path: str, check_model: MjModel | None = None) -> None:
-    """Writes the model MuJoCo parsed last (from XML) to ``xml_path``."""
-    mujoco.mj_saveLastXML(str(xml_path), getattr(check_model, "ptr", check_model))
+    """Writes the model MuJoCo parsed last (from XML), with ``check_model``'s current
+    values where given, to ``xml_path``.
+
+    Raises:
+      ValueError: if ``check_model`` is not the model parsed last.
+    """
+    last = _last_parsed() if _last_parsed is not None else None
+    if check_model is not None and getattr(check_model, "ptr", check_model) is not last:
+        raise ValueError(_NOT_LAST_PARSED_ERROR)
+    mujoco.mj_saveLastXML(str(xml_path), last)
 
 
 class MjvCamera(mujoco.MjvCamera):

@@ -227,7 +227,7 @@ def test_reset_rejects_a_missing_keyframe(physics):
 def test_reset_rejects_the_keyframe_id_one_past_the_last(physics):
     with pytest.raises(ValueError) as raised:
         physics.reset(keyframe_id=1)  # the model has one keyframe, id 0
-    assert str(raised.value) == "keyframe_id 1 is out of range: the model has 1 keyframe(s)"
+    assert str(raised.value) == "keyframe_id 1 is out of range: expected 0 to 0"
 
 
 def test_reset_context_keeps_the_state_set_inside_and_updates_positions(physics):
