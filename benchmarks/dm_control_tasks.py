@@ -1,7 +1,8 @@
-"""dm_control's own manipulation tasks: this project + mujoco 4 vs dm_control 1.0.50 + 3.17.
+"""dm_control's own manipulation and Control Suite tasks: this project + mujoco 4 vs
+dm_control 1.0.50 + 3.17.
 
 Usage: ``python benchmarks/dm_control_tasks.py [--trials 3] [--steps 200] [--resets 5]
-[--tasks NAME ...]``
+[--tasks NAME ...] [--sections manipulation suite]``
 
 Builds two scratch venvs under ``.cache/dm_control_tasks`` (once): real dm_control 1.0.50 on
 mujoco 3.17.0, and dm_control 1.0.50 whose ``composer``/``mjcf`` are served by this project
@@ -9,6 +10,12 @@ mujoco 3.17.0, and dm_control 1.0.50 whose ``composer``/``mjcf`` are served by t
 and random actions run in both; trials alternate between the two. Prints a table of reset ms
 and step ms (medians over trials), their ratio ours / dm_control, and each one's step time
 over the raw ``mj_step`` calls of the same steps (the framework's own overhead).
+
+The suite section (``suite.load`` of ``SUITE_TASKS``; its ``rl.control.Environment`` and task
+code are dm_control's in both venvs, its ``dm_control.mujoco`` engine is ours in one) prints
+``env.step`` over raw ``mj_step`` of the same steps, the engine's share (``physics.step``
+over the same raw steps: what the engine adds to stepping), and ``suite.load`` over one raw
+``mujoco.MjModel.from_xml_string`` of the same XML and assets in the same process.
 """
 
 from __future__ import annotations
@@ -83,6 +90,79 @@ for line in sys.stdin:
 """
 
 
+SUITE_TASKS = (
+    "cartpole-swingup",
+    "walker-walk",
+    "cheetah-run",
+    "humanoid-run",
+    "quadruped-run",
+)
+
+# The suite's worker: answers "DOMAIN-TASK" lines with one trial's timings (seconds): a
+# suite.load, a raw compile of the same XML, and per step: env.step, the physics.step inside
+# it, and the raw mj_step calls of the same steps.
+_SUITE_WORKER = r"""
+import importlib, json, sys, time
+import mujoco
+import numpy as np
+if sys.argv[1] == "ours":
+    from composer import dm_control_compat
+    dm_control_compat.install()
+from dm_control import suite
+steps = int(sys.argv[2])
+print("READY", flush=True)
+for line in sys.stdin:
+    domain, task = line.strip().split("-", 1)
+    start = time.perf_counter()
+    env = suite.load(domain, task, task_kwargs={"random": 0})
+    load_seconds = time.perf_counter() - start
+    xml, assets = importlib.import_module("dm_control.suite." + domain).get_model_and_assets()
+    start = time.perf_counter()
+    mujoco.MjModel.from_xml_string(xml, assets)
+    compile_seconds = time.perf_counter() - start
+    env.reset()
+    physics = env.physics
+    spec = env.action_spec()
+    rng = np.random.RandomState(0)
+    low = np.where(np.abs(spec.minimum) < 1e9, spec.minimum, -1.0)
+    high = np.where(np.abs(spec.maximum) < 1e9, spec.maximum, 1.0)
+    actions = rng.uniform(low, high, size=(steps,) + spec.shape)
+    model, data = physics.model.ptr, physics.data.ptr
+    kind = mujoco.mjtState.mjSTATE_INTEGRATION
+    initial = np.empty(mujoco.mj_stateSize(model, kind))
+    mujoco.mj_getState(model, data, initial, kind)
+    physics_seconds = [0.0]
+    inner_step = physics.step
+    def timed_step(*args, **kwargs):
+        begin = time.perf_counter()
+        inner_step(*args, **kwargs)
+        physics_seconds[0] += time.perf_counter() - begin
+    physics.step = timed_step
+    controls, substeps = [], []
+    step_seconds = 0.0
+    for action in actions:
+        before = data.time
+        start = time.perf_counter()
+        timestep = env.step(action)
+        step_seconds += time.perf_counter() - start
+        controls.append(data.ctrl.copy())
+        substeps.append(int(round((data.time - before) / model.opt.timestep)))
+        if timestep.last():
+            break
+    del physics.step
+    mujoco.mj_setState(model, data, initial, kind)
+    start = time.perf_counter()
+    for control, n in zip(controls, substeps):
+        data.ctrl[:] = control
+        mujoco.mj_step(model, data, n)
+    raw_seconds = time.perf_counter() - start
+    n = len(controls)
+    print(json.dumps({"load": load_seconds, "compile": compile_seconds,
+                      "step": step_seconds / n, "physics": physics_seconds[0] / n,
+                      "raw": raw_seconds / n}), flush=True)
+"""
+
+
 class Timing(NamedTuple):
     """Median times of one implementation on one task, in milliseconds: a reset, an
     ``env.step``, and the raw ``mj_step`` calls of the same step on the same state."""
@@ -95,9 +175,9 @@ class Timing(NamedTuple):
 class Worker:
     """A long-lived process in one venv that runs trials on request."""
 
-    def __init__(self, python: Path, flavour: str, resets: int, steps: int):
+    def __init__(self, python: Path, flavour: str, script: str, *script_args: int):
         self._process = subprocess.Popen(
-            [str(python), "-c", _WORKER, flavour, str(resets), str(steps)],
+            [str(python), "-c", script, flavour, *map(str, script_args)],
             stdin=subprocess.PIPE,
             stdout=subprocess.PIPE,
             text=True,
@@ -131,25 +211,10 @@ def _default_tasks(python: Path) -> list[str]:
     return sorted(name for name in listing.stdout.split() if name.endswith("_features"))
 
 
-def main() -> None:
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--trials", type=int, default=3)
-    parser.add_argument("--steps", type=int, default=200)
-    parser.add_argument("--resets", type=int, default=5)
-    parser.add_argument("--tasks", nargs="*")
-    args = parser.parse_args()
-    CACHE.mkdir(parents=True, exist_ok=True)
-    dm_python = scratch_venv.ensure_venv(
-        CACHE / "dm_control-venv", [DM_CONTROL, DM_CONTROL_MUJOCO], project=False
-    )
-    our_python = scratch_venv.ensure_venv(CACHE / "ours-venv", [DM_CONTROL])
-    tasks = args.tasks or _default_tasks(dm_python)
-    workers = {
-        "ours": Worker(our_python, "ours", args.resets, args.steps),
-        "dm_control": Worker(dm_python, "dm_control", args.resets, args.steps),
-    }
+def _run_trials(workers: dict, tasks: list[str], trials: int) -> dict:
+    """(flavour, task) -> the trials' results, the two implementations alternating."""
     samples = {(flavour, task): [] for flavour in workers for task in tasks}
-    for trial in range(args.trials):
+    for trial in range(trials):
         for task in tasks:
             # Alternate which implementation goes first, so drift hits both alike.
             order = list(workers) if trial % 2 == 0 else list(reversed(workers))
@@ -157,6 +222,84 @@ def main() -> None:
                 samples[flavour, task].append(workers[flavour].trial(task))
     for worker in workers.values():
         worker.close()
+    return samples
+
+
+def _suite_section(pythons: dict, trials: int, steps: int) -> None:
+    workers = {
+        flavour: Worker(python, flavour, _SUITE_WORKER, steps)
+        for flavour, python in pythons.items()
+    }
+    samples = _run_trials(workers, list(SUITE_TASKS), trials)
+
+    def median(flavour: str, task: str, key: str) -> float:
+        return statistics.median(r[key] for r in samples[flavour, task])
+
+    print(
+        f"\ndm_control 1.0.50 Control Suite (suite.load): ours = dm_control.mujoco served by "
+        f"this project + mujoco (project venv), dm_control = dm_control + {DM_CONTROL_MUJOCO}; "
+        f"medians of {trials} trials, {steps} steps each"
+    )
+    print(
+        f"{'task':<18} {'step/raw':>8} {'dm':>6}  {'engine/raw':>10} {'dm':>6}  "
+        f"{'step us':>7} {'dm':>6}  {'load/compile':>12} {'dm':>6}  {'load ms':>7} {'dm':>6}"
+    )
+    for task in SUITE_TASKS:
+        row = {}
+        for flavour in ("ours", "dm_control"):
+            raw = median(flavour, task, "raw")
+            row[flavour] = (
+                median(flavour, task, "step") / raw,
+                median(flavour, task, "physics") / raw,
+                1e6 * median(flavour, task, "step"),
+                median(flavour, task, "load") / median(flavour, task, "compile"),
+                1e3 * median(flavour, task, "load"),
+            )
+        ours, theirs = row["ours"], row["dm_control"]
+        print(
+            f"{task:<18} {ours[0]:7.2f}x {theirs[0]:5.2f}x  {ours[1]:9.2f}x {theirs[1]:5.2f}x  "
+            f"{ours[2]:7.1f} {theirs[2]:6.1f}  {ours[3]:11.2f}x {theirs[3]:5.2f}x  "
+            f"{ours[4]:7.1f} {theirs[4]:6.1f}"
+        )
+    print(
+        "step/raw: env.step over raw mj_step of the same steps in the same venv; engine/raw: "
+        "the physics.step calls inside those env.steps over the same raw steps; load/compile: "
+        "suite.load over one MjModel.from_xml_string of the same XML and assets "
+        "(targets: step/raw <= dm_control's, load/compile <= 1.10)"
+    )
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--trials", type=int, default=3)
+    parser.add_argument("--steps", type=int, default=200)
+    parser.add_argument("--resets", type=int, default=5)
+    parser.add_argument("--tasks", nargs="*")
+    parser.add_argument(
+        "--sections",
+        nargs="+",
+        choices=("manipulation", "suite"),
+        default=["manipulation", "suite"],
+    )
+    args = parser.parse_args()
+    CACHE.mkdir(parents=True, exist_ok=True)
+    dm_python = scratch_venv.ensure_venv(
+        CACHE / "dm_control-venv", [DM_CONTROL, DM_CONTROL_MUJOCO], project=False
+    )
+    our_python = scratch_venv.ensure_venv(CACHE / "ours-venv", [DM_CONTROL])
+    if "manipulation" in args.sections:
+        _manipulation_section(our_python, dm_python, args)
+    if "suite" in args.sections:
+        _suite_section({"ours": our_python, "dm_control": dm_python}, args.trials, args.steps)
+
+
+def _manipulation_section(our_python: Path, dm_python: Path, args: argparse.Namespace) -> None:
+    tasks = args.tasks or _default_tasks(dm_python)
+    workers = {
+        "ours": Worker(our_python, "ours", _WORKER, args.resets, args.steps),
+        "dm_control": Worker(dm_python, "dm_control", _WORKER, args.resets, args.steps),
+    }
+    samples = _run_trials(workers, tasks, args.trials)
 
     def median(flavour: str, task: str) -> Timing:
         runs = samples[flavour, task]
