@@ -38,7 +38,7 @@ import scratch_venv  # noqa: E402
 
 CACHE = scratch_venv.CACHE / "dm_control_conformance"
 DM_CONTROL_VERSION = "1.0.50"
-TEST_EXTRAS = ["mock", "pytest", "pillow"]
+TEST_EXTRAS = ["mock", "pytest", "pillow", "h5py"]
 
 #: dm_control packages whose test files are run: the three this project serves, and the
 #: packages built on them (entities of the manipulation suite, the Control Suite, its RL
@@ -186,7 +186,37 @@ for group, name, load in _loaders():
         results[name] = {"group": group, "ok": True, "seconds": time.perf_counter() - start}
     except Exception as e:  # report every task, whatever fails
         results[name] = {"group": group, "ok": False, "error": f"{type(e).__name__}: {e}"[:300]}
-print("RESULTS" + json.dumps(results))
+
+def _trajectory_gap(domain, task, steps):
+    # The suite env against raw mj_step on a model compiled from the suite's own XML,
+    # started from the env's state after reset and driven by the same controls.
+    import importlib, mujoco
+    env = suite.load(domain, task, task_kwargs={"random": 0})
+    env.reset()
+    model, data = env.physics.model.ptr, env.physics.data.ptr
+    xml, assets = importlib.import_module("dm_control.suite." + domain).get_model_and_assets()
+    raw_model = mujoco.MjModel.from_xml_string(xml, assets)
+    raw_data = mujoco.MjData(raw_model)
+    kind = mujoco.mjtState.mjSTATE_INTEGRATION
+    state = np.empty(mujoco.mj_stateSize(model, kind))
+    mujoco.mj_getState(model, data, state, kind)
+    mujoco.mj_setState(raw_model, raw_data, state, kind)
+    spec, rng, gap = env.action_spec(), np.random.RandomState(1), 0.0
+    for _ in range(steps):
+        before = data.time
+        env.step(_random_action(rng, spec))
+        raw_data.ctrl[:] = data.ctrl
+        mujoco.mj_step(raw_model, raw_data, int(round((data.time - before) / model.opt.timestep)))
+        gap = max(gap, float(np.max(np.abs(raw_data.qpos - data.qpos))))
+    return gap
+
+trajectories = {}
+for name in ("cartpole-swingup", "walker-walk", "cheetah-run", "humanoid-run", "quadruped-run"):
+    try:
+        trajectories[name] = _trajectory_gap(*name.split("-"), int(sys.argv[1]))
+    except Exception as e:
+        trajectories[name] = f"{type(e).__name__}: {e}"[:300]
+print("RESULTS" + json.dumps({"environments": results, "trajectories": trajectories}))
 """
 
 
@@ -219,7 +249,11 @@ def copy_tests(python: Path, packages: tuple[str, ...] = TESTED_PACKAGES) -> Pat
         for path in (source / package).rglob("*"):
             relative = path.relative_to(source).as_posix()
             is_test = path.name.endswith("_test.py") and relative not in EXCLUDED_TEST_FILES
-            is_asset = bool(ASSET_FOLDERS.intersection(path.parts)) and path.is_file()
+            is_asset = path.is_file() and (
+                bool(ASSET_FOLDERS.intersection(path.parts))
+                # Test data beside the tests (`locomotion/mocap/test_trajectories.h5`).
+                or (path.name.startswith("test_") and path.suffix not in (".py", ".pyc"))
+            )
             if is_test or is_asset:
                 # Renamed so that the copies never shadow the `composer`/`mjcf` packages.
                 target = destination / f"dm_control_{relative}"
@@ -327,6 +361,17 @@ def print_test_table(results: list[FileResult], failing: list[str]) -> float:
     return rate
 
 
+def print_trajectory_table(gaps: dict) -> int:
+    """Prints each suite trajectory's largest qpos difference from raw ``mj_step``; returns
+    how many differ or failed."""
+    print(f"\n{'suite task vs raw mj_step, same model':<45} max |qpos - raw qpos| over the run")
+    failed = 0
+    for name, gap in gaps.items():
+        failed += not (isinstance(gap, float) and gap == 0.0)
+        print(f"{name:<45} {gap if isinstance(gap, str) else f'{gap:.3g}'}")
+    return failed
+
+
 def print_task_table(results: dict) -> int:
     """Prints each environment's result, grouped by package; returns how many failed."""
     for group in dict.fromkeys(r["group"] for r in results.values()):
@@ -361,7 +406,10 @@ def main() -> int:
             print(f"pass rate {rate:.1%} is below the floor {args.floor:.1%}")
             status = 1
     if not args.tests_only:
-        if print_task_table(run_tasks(python)):
+        outcome = run_tasks(python)
+        if print_task_table(outcome["environments"]) + print_trajectory_table(
+            outcome["trajectories"]
+        ):
             status = 1
     return status
 
