@@ -211,7 +211,7 @@ def _trajectory_gap(domain, task, steps):
     return gap
 
 trajectories = {}
-for name in ("cartpole-swingup", "walker-walk", "cheetah-run", "humanoid-run", "quadruped-run"):
+for name in ("cartpole-swingup", "walker-walk", "cheetah-run", "humanoid-run", "finger-spin"):
     try:
         trajectories[name] = _trajectory_gap(*name.split("-"), int(sys.argv[1]))
     except Exception as e:
