@@ -57,10 +57,16 @@ class _Rows:
         self._family = family
         self._rule = rule
         self._field = field
+        # Names and lists of names already converted: a model's names never change, and
+        # task code reads the same names every step.
+        self._converted = {}
 
     def convert(self, key):
         if isinstance(key, str):
-            return self._layout.single_index(self._rule, self._id(key))
+            index = self._converted.get(key)
+            if index is None:
+                index = self._converted[key] = self._layout.single_index(self._rule, self._id(key))
+            return index
         if isinstance(key, np.ndarray) and key.ndim > 1 and key.size and _is_name(key.flat[0]):
             # A grid of names (as np.ix_ makes): one row per name, in the grid's shape.
             rows = self._layout.multi_index(self._rule, [self._id(name) for name in key.flat])
@@ -71,7 +77,16 @@ class _Rows:
                 )
             return rows.reshape(key.shape)
         if isinstance(key, (list, np.ndarray)) and len(key) and _is_name(key[0]):
-            return self._layout.multi_index(self._rule, [self._id(name) for name in key])
+            if key.__class__ is list:
+                try:
+                    return self._converted[tuple(key)]
+                except (KeyError, TypeError):
+                    pass
+            rows = self._layout.multi_index(self._rule, [self._id(name) for name in key])
+            rows.flags.writeable = False
+            if key.__class__ is list and all(map(_is_name, key)):
+                self._converted[tuple(key)] = rows
+            return rows
         return key
 
     def names(self) -> list | None:

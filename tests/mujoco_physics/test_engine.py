@@ -167,3 +167,14 @@ def test_freed_physics_says_so_and_keeps_its_subclass():
     assert isinstance(physics, CartPhysics)
     with pytest.raises(AttributeError, match="this Physics was freed"):
         physics.step()
+
+
+def test_repeated_reads_and_writes_by_a_list_of_names_follow_the_data():
+    physics = mujoco_physics.Physics.from_xml_string(_XML)
+    joints = ["hinge", "slider"]
+    for value in (0.25, -0.5):
+        physics.named.data.qpos[joints] = [value, 2 * value]
+        np.testing.assert_array_equal(physics.named.data.qpos[joints], [value, 2 * value])
+        np.testing.assert_array_equal(physics.data.qpos, [2 * value, value])
+    with pytest.raises(KeyError, match="'qpos': no joint named 'elbow' in this model"):
+        physics.named.data.qpos[["hinge", "elbow"]]
