@@ -176,5 +176,7 @@ def test_repeated_reads_and_writes_by_a_list_of_names_follow_the_data():
         physics.named.data.qpos[joints] = [value, 2 * value]
         np.testing.assert_array_equal(physics.named.data.qpos[joints], [value, 2 * value])
         np.testing.assert_array_equal(physics.data.qpos, [2 * value, value])
+        np.testing.assert_array_equal(physics.named.data.qpos[["hinge"]], [value])
+        np.testing.assert_array_equal(physics.named.data.qpos[joints[::-1]], [2 * value, value])
     with pytest.raises(KeyError, match="'qpos': no joint named 'elbow' in this model"):
         physics.named.data.qpos[["hinge", "elbow"]]
