@@ -391,39 +391,31 @@ def save_last_parsed_model_to_xml(xml_path: str, check_model: MjModel | None = N
     mujoco.mj_saveLastXML(str(xml_path), last)
 
 
-class MjvCamera(mujoco.MjvCamera):
+class _OwnPointer:
+    """dm_control's ``ptr`` on a struct that is itself the ``mujoco`` object."""
+
+    @property
+    def ptr(self):
+        return self
+
+
+class MjvCamera(_OwnPointer, mujoco.MjvCamera):
     """``mujoco.MjvCamera`` with dm_control's ``ptr``."""
 
-    @property
-    def ptr(self) -> "MjvCamera":
-        return self
 
-
-class MjvOption(mujoco.MjvOption):
+class MjvOption(_OwnPointer, mujoco.MjvOption):
     """``mujoco.MjvOption`` with dm_control's ``ptr``."""
 
-    @property
-    def ptr(self) -> "MjvOption":
-        return self
 
-
-class MjvPerturb(mujoco.MjvPerturb):
+class MjvPerturb(_OwnPointer, mujoco.MjvPerturb):
     """``mujoco.MjvPerturb`` with dm_control's ``ptr``."""
 
-    @property
-    def ptr(self) -> "MjvPerturb":
-        return self
 
-
-class MjvFigure(mujoco.MjvFigure):
+class MjvFigure(_OwnPointer, mujoco.MjvFigure):
     """``mujoco.MjvFigure`` with dm_control's ``ptr``."""
 
-    @property
-    def ptr(self) -> "MjvFigure":
-        return self
 
-
-class MjvScene(mujoco.MjvScene):
+class MjvScene(_OwnPointer, mujoco.MjvScene):
     """``mujoco.MjvScene`` for a wrapped model, with dm_control's ``ptr`` and ``free``."""
 
     def __init__(self, model: MjModel | None = None, max_geom: int = 1000):
@@ -432,22 +424,14 @@ class MjvScene(mujoco.MjvScene):
         else:
             super().__init__(getattr(model, "ptr", model), max_geom)
 
-    @property
-    def ptr(self) -> "MjvScene":
-        return self
-
     def free(self) -> None:
         """Nothing to do: the scene's memory goes with the object."""
 
 
-class MjrContext(mujoco.MjrContext):
+class MjrContext(_OwnPointer, mujoco.MjrContext):
     """``mujoco.MjrContext`` with dm_control's ``ptr``; needs a current OpenGL context."""
 
     def __init__(
         self, model: MjModel, gl_context=None, font_scale=mujoco.mjtFontScale.mjFONTSCALE_150
     ):
         super().__init__(getattr(model, "ptr", model), font_scale)
-
-    @property
-    def ptr(self) -> "MjrContext":
-        return self

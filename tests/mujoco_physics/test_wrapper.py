@@ -67,3 +67,13 @@ def test_constants_sizes_and_mjlib_come_from_the_installed_mujoco():
     assert sizes.array_sizes["mjmodel"]["geom_size"] == ("ngeom", 3)
     assert sizes.array_sizes["mjdata"]["qpos"] == ("nq",)
     assert mjlib.mj_step is mujoco.mj_step
+
+
+def test_visualisation_structs_pass_themselves_as_ptr_to_mujoco():
+    option = wrapper.MjvOption()
+    option.geomgroup[0] = 0
+    mujoco.mjv_defaultOption(option.ptr)
+    assert option.ptr is option and option.geomgroup[0] == 1
+    camera = wrapper.MjvCamera()
+    mujoco.mjv_defaultFreeCamera(wrapper.MjModel.from_xml_string(_XML).ptr, camera.ptr)
+    assert camera.type == mujoco.mjtCamera.mjCAMERA_FREE
