@@ -14,7 +14,8 @@ wording is not. It then loads every ``dm_control.manipulation`` ``*_features`` t
 environments of ``locomotion.examples.basic_cmu_2019`` / ``basic_rodent_2020`` and
 ``soccer.load(team_size=2)`` through the same redirect, from a working directory of its
 own, and runs each for a reset and 100 random steps (actions uniform within the action
-spec's bounds, within [-1, 1] where a bound is MuJoCo's "unbounded" 1e10).
+spec's bounds, within [-1, 1] where a bound is MuJoCo's "unbounded" 1e10); it compares a few
+suite trajectories with raw ``mj_step`` and runs the README's dm_control examples.
 
 Prints a per-file table with subtotals per package, the failing test ids with the known
 reasons, a per-task table and the totals; exits 1 when the test pass rate is below
@@ -29,6 +30,7 @@ import os
 import shutil
 import subprocess
 import sys
+import time
 import xml.etree.ElementTree as ElementTree
 from pathlib import Path
 from typing import NamedTuple
@@ -328,8 +330,34 @@ def run_tasks(python: Path) -> dict:
     )
     for line in completed.stdout.splitlines():
         if line.startswith("RESULTS"):
-            return json.loads(line[len("RESULTS") :])
-    raise RuntimeError(f"the manipulation runner printed no results:\n{completed.stderr[-3000:]}")
+            outcome = json.loads(line[len("RESULTS") :])
+            outcome["environments"].update(run_readme_examples(python, env, workdir))
+            return outcome
+    raise RuntimeError(f"the task runner printed no results:\n{completed.stderr[-3000:]}")
+
+
+def run_readme_examples(python: Path, env: dict, workdir: Path) -> dict:
+    """Runs the README's examples of its "Run existing dm_control code" section (the suite
+    episode needs dm_control, which the project's own README test does not have)."""
+    text = (scratch_venv.REPO / "README.md").read_text(encoding="utf-8")
+    section = text.split("## Run existing dm_control code", 1)[1].split("\n## ", 1)[0]
+    results = {}
+    for number, block in enumerate(section.split("```python\n")[1:], start=1):
+        start = time.perf_counter()
+        completed = subprocess.run(
+            [str(python), "-c", block.split("```", 1)[0]],
+            capture_output=True,
+            text=True,
+            env=env,
+            cwd=workdir,
+        )
+        name = f"README example {number}"
+        if completed.returncode == 0:
+            results[name] = {"group": "readme", "ok": True, "seconds": time.perf_counter() - start}
+        else:
+            error = completed.stderr.strip().splitlines()[-1:] or ["(no output)"]
+            results[name] = {"group": "readme", "ok": False, "error": error[0][:300]}
+    return results
 
 
 def _subtotal(label: str, results: list[FileResult], width: int) -> float:
