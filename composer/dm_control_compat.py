@@ -1,5 +1,5 @@
-"""Serve ``dm_control.composer``, ``dm_control.mjcf`` and ``dm_control.mujoco`` from this
-project's packages.
+"""Serve ``dm_control.composer``, ``dm_control.mjcf``, ``dm_control.mujoco`` and
+``dm_control.viewer`` from this project's packages.
 
 ``install()`` puts an import hook in front of ``sys.meta_path``: afterwards
 ``import dm_control.composer`` (and every ``dm_control.composer.*`` / ``dm_control.mjcf.*`` /
@@ -9,7 +9,10 @@ project's packages.
 ``dm_control.entities``, ``dm_control.manipulation``, ``dm_control.utils``, ...) stays the real
 one and, since it imports those packages through the same names, runs on this project.
 ``dm_control.rl.control.PhysicsError`` becomes this project's ``PhysicsError``, so that
-dm_control's code catches the errors our ``Physics`` raises. Without an installed dm_control, a bare
+dm_control's code catches the errors our ``Physics`` raises. ``dm_control.viewer`` is the
+module ``composer.viewer``, whose ``launch`` takes dm_control's arguments; dm_control's viewer
+submodules (``dm_control.viewer.application``, ...) are not served, and importing one says
+``'dm_control.viewer' is not a package``. Without an installed dm_control, a bare
 ``dm_control`` package is provided so that ``from dm_control import composer, mjcf`` works.
 
 Run a script written for dm_control without editing it::
@@ -36,6 +39,7 @@ REDIRECTED_PACKAGES: dict[str, str] = {
     "dm_control.composer": "composer",
     "dm_control.mjcf": "mjcf",
     "dm_control.mujoco": "mujoco_physics",
+    "dm_control.viewer": "composer.viewer",
 }
 
 #: Attributes of real dm_control modules replaced, once such a module is loaded, by this
@@ -96,7 +100,7 @@ class _BareDmControlLoader(importlib.abc.Loader):
 
     def exec_module(self, module):
         module.__doc__ = (
-            "Stand-in dm_control package: composer, mjcf and mujoco come from this project."
+            "Stand-in dm_control package: composer, mjcf, mujoco and viewer come from this project."
         )
 
 
@@ -156,8 +160,8 @@ def install() -> None:
     """Serves ``REDIRECTED_PACKAGES`` from this project from now on.
 
     Idempotent. Raises ``RuntimeError`` naming the modules when dm_control's own
-    ``composer``, ``mjcf`` or ``mujoco`` is already imported, since objects made from those
-    would not mix with this project's.
+    ``composer``, ``mjcf``, ``mujoco`` or ``viewer`` is already imported, since objects made
+    from those would not mix with this project's.
     """
     if installed():
         return

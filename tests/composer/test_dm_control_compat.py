@@ -149,6 +149,33 @@ def test_module_missing_from_this_project_is_a_module_not_found_error():
     assert result.stdout.strip() == "ModuleNotFoundError dm_control.composer.no_such_module"
 
 
+def test_dm_control_viewer_is_this_projects_viewer_and_has_no_submodules():
+    result = _run_python(
+        textwrap.dedent(
+            """
+            from composer import dm_control_compat
+            dm_control_compat.install()
+            from dm_control import viewer
+            import composer.viewer
+            print(viewer is composer.viewer, viewer.launch.__module__)
+            try:
+                import dm_control.viewer.application
+            except ModuleNotFoundError as e:
+                print(e)
+            dm_control_compat.uninstall()
+            import sys
+            print("dm_control.viewer" in sys.modules)
+            """
+        )
+    )
+    assert result.returncode == 0, result.stderr
+    assert result.stdout.split("\n")[:3] == [
+        "True composer.viewer",
+        "No module named 'dm_control.viewer.application'; 'dm_control.viewer' is not a package",
+        "False",
+    ]
+
+
 def test_without_install_dm_control_names_are_not_served():
     if _dm_control_installed():
         pytest.skip("dm_control is installed here, so `import dm_control` succeeds on its own")
