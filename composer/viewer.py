@@ -1,8 +1,13 @@
-"""Interactive viewer: a `composer.Environment` in MuJoCo's passive viewer, acted on in real time.
+"""Interactive viewer: an environment in MuJoCo's passive viewer, acted on in real time.
 
-`launch` opens ``mujoco.viewer.launch_passive`` on the environment's physics and steps the
-environment itself, sleeping so that each control step lasts ``control_timestep / speed``
-seconds of wall-clock time (when stepping is slower than that, it runs as fast as it can).
+`launch` takes dm_control's arguments (``launch(environment_loader, policy=None,
+title="Explorer", width=1024, height=768)``, served as ``dm_control.viewer`` by
+`composer.dm_control_compat`) for a `composer.Environment`, a Control Suite environment or
+any dm_env environment whose ``physics`` has ``model.ptr`` / ``data.ptr`` (the raw
+``mujoco.MjModel`` / ``mujoco.MjData``). It opens ``mujoco.viewer.launch_passive`` on that
+physics and steps the environment itself, sleeping so that each control step lasts
+``control_timestep / speed`` seconds of wall-clock time (when stepping is slower than that,
+it runs as fast as it can).
 Keys, read through launch_passive's ``key_callback``:
 
 ==============  ===============================================
@@ -18,6 +23,10 @@ top-left corner with ``Handle.set_texts``. MuJoCo releases whose viewer lacks
 
 MuJoCo's viewer runs its own key handling as well; in particular its backspace resets the
 MjData, which our reset then overwrites with the task's initial state.
+
+Unlike dm_control's viewer, this one starts running rather than paused, and backspace resets
+the environment instead of calling the loader again. The window's title and size are set
+through X11 (`composer._x11_window`); elsewhere MuJoCo's own are kept, with a warning.
 
 Needs a display and GLFW (the ``glfw`` package comes with ``mujoco``); on a headless
 machine run it under Xvfb. Closing the window ends `launch`.
@@ -38,12 +47,15 @@ import mujoco.viewer
 import numpy as np
 from absl import logging
 
+from composer import _x11_window
+
 if TYPE_CHECKING:
     import dm_env
 
-    import composer
-
+#: Chooses the action for the next step from the last TimeStep.
 Policy = Callable[["dm_env.TimeStep"], Any]
+#: Makes the environment to show; called once, with no arguments.
+EnvironmentLoader = Callable[[], "dm_env.Environment"]
 
 MIN_SPEED = 1 / 16
 MAX_SPEED = 16.0
@@ -116,13 +128,19 @@ def _speed(speed) -> float:
     return float(speed)
 
 
+class _WindowLook(NamedTuple):
+    title: str
+    width: int
+    height: int
+
+
 class _Window(NamedTuple):
     handle: mujoco.viewer.Handle
     thread: threading.Thread
     data: mujoco.MjData
 
 
-def _open_window(physics, controls: Controls, show_ui: bool) -> _Window:
+def _open_window(physics, controls: Controls, show_ui: bool, look: _WindowLook) -> _Window:
     # launch_passive runs the window in a thread it does not hand out; it is the one thread
     # it adds, and joining it after close() lets GLFW tear down before the process exits.
     before = set(threading.enumerate())
@@ -135,6 +153,15 @@ def _open_window(physics, controls: Controls, show_ui: bool) -> _Window:
         show_right_ui=show_ui,
     )
     (thread,) = [t for t in threading.enumerate() if t not in before]
+    try:
+        _x11_window.retitle_and_resize(*look)
+    except OSError as error:
+        logging.warning(
+            "viewer: the window keeps MuJoCo's title and size (title=%r, width=%d, height=%d "
+            "not applied): %s",
+            *look,
+            error,
+        )
     return _Window(handle, thread, data)
 
 
@@ -174,25 +201,36 @@ class _StatusDisplay:
 
 
 def launch(
-    environment: composer.Environment,
+    environment_loader: dm_env.Environment | EnvironmentLoader,
     policy: Policy | None = None,
+    title: str = "Explorer",
+    width: int = 1024,
+    height: int = 768,
     *,
     speed: float = 1.0,
     max_steps: int | None = None,
     on_refresh: Callable[[mujoco.viewer.Handle, ViewerStatus], None] | None = None,
     show_ui: bool = False,
 ) -> ViewerStatus:
-    """Shows `environment` in a window and runs `policy` on it in real time until closed.
+    """Shows an environment in a window and runs `policy` on it in real time until closed.
 
-    Resets the environment, then steps it with `policy` (a callable TimeStep -> action;
-    zero actions of the action spec's shape when None), starting a new episode after each
+    Resets the environment, then steps it with `policy`, starting a new episode after each
     LAST step or backspace. Blocks until the window is closed or `max_steps` steps were
-    taken, then closes the window.
+    taken, then closes the window. The positional arguments are dm_control's
+    ``viewer.launch``'s.
 
     Args:
-      environment: a `composer.Environment`.
-      policy: a callable TimeStep -> action, or None for zero actions.
-      speed: initial playback speed, a multiple of real time in [1/16, 16].
+      environment_loader: the environment, or a callable taking no arguments that returns
+        it (called once). A `composer.Environment`, a Control Suite environment, or any
+        object with dm_env's ``reset``, ``step`` and ``action_spec`` and a ``physics`` whose
+        ``model.ptr`` / ``data.ptr`` are a ``mujoco.MjModel`` / ``mujoco.MjData``.
+      policy: a callable TimeStep -> action, or None for the action spec's resting action:
+        the midpoint of a bounded range, the finite bound of a half-bounded one, else zero.
+      title: the window's title.
+      width: the window's width in screen pixels.
+      height: the window's height in screen pixels.
+      speed: initial playback speed, a multiple of real time in [1/16, 16]. One step lasts
+        the environment's ``control_timestep()`` (its physics timestep if it has none).
       max_steps: stop after this many steps in all (None: only when the window closes).
       on_refresh: called with the viewer handle and the `ViewerStatus` after each window
         refresh, in the calling thread (for scripting and tests; calling
@@ -203,7 +241,11 @@ def launch(
       The last `ViewerStatus` (total steps, episodes started, ...).
 
     Raises:
-      ValueError: naming the argument for a bad `speed`, `max_steps` or `policy`.
+      ValueError: naming the argument for a bad `speed`, `max_steps`, `policy`, `title`,
+        `width` or `height`.
+      TypeError: `environment_loader` is neither an environment nor a callable returning
+        one, or its environment's physics has no ``model.ptr`` / ``data.ptr``.
+      RuntimeError: calling `environment_loader` raised (the error is chained).
     """
     controls = Controls(speed)
     if max_steps is not None and (
@@ -212,28 +254,31 @@ def launch(
         raise ValueError(f"max_steps: expected an integer >= 1 or None, got {max_steps!r}")
     if policy is not None and not callable(policy):
         raise ValueError(f"policy: expected a callable TimeStep -> action or None, got {policy!r}")
-    control_timestep = environment.control_timestep()
+    look = _window_look(title, width, height)
+    environment = _load_environment(environment_loader)
     display = _StatusDisplay()
 
     timestep = environment.reset()
-    zero_action = _zero_action(environment)
+    _check_physics(environment, environment_loader)
+    control_timestep = _control_timestep(environment)
+    default_action = _default_action(environment.action_spec())
     steps, episodes, episode_step, episode_return = 0, 1, 0, 0.0
     status = ViewerStatus(0, 1, 0, None, 0.0, controls.speed, controls.paused)
-    window = _open_window(environment.physics, controls, show_ui)
+    window = _open_window(environment.physics, controls, show_ui, look)
     try:
         deadline = time.perf_counter()
         while window.handle.is_running() and (max_steps is None or steps < max_steps):
             stepped = False
             if controls.take_reset() or timestep.last():
                 timestep = environment.reset()
-                zero_action = _zero_action(environment)
+                default_action = _default_action(environment.action_spec())
                 episodes, episode_step, episode_return = episodes + 1, 0, 0.0
                 if environment.physics.data.ptr is not window.data:
                     # A recompile changed the model's structure: show the new Physics.
                     _close_window(window)
-                    window = _open_window(environment.physics, controls, show_ui)
+                    window = _open_window(environment.physics, controls, show_ui, look)
             elif controls.take_step():
-                action = zero_action if policy is None else policy(timestep)
+                action = default_action if policy is None else policy(timestep)
                 timestep = environment.step(action)
                 steps, episode_step, stepped = steps + 1, episode_step + 1, True
                 if timestep.reward is not None:
@@ -259,9 +304,96 @@ def launch(
     return status
 
 
-def _zero_action(environment) -> np.ndarray:
-    spec = environment.action_spec()
-    return np.zeros(spec.shape, spec.dtype)
+def _window_look(title, width, height) -> _WindowLook:
+    if not isinstance(title, str):
+        raise ValueError(f"title: expected a string, got {title!r}")
+    for name, value in (("width", width), ("height", height)):
+        if isinstance(value, bool) or not isinstance(value, numbers.Integral) or value < 1:
+            raise ValueError(f"{name}: expected an integer >= 1 (screen pixels), got {value!r}")
+    return _WindowLook(title, int(width), int(height))
+
+
+_EXPECTED_ENVIRONMENT = (
+    "an environment (with reset, step, action_spec and a physics whose model.ptr and "
+    "data.ptr are a mujoco.MjModel and a mujoco.MjData) or a callable returning one"
+)
+
+
+_ENVIRONMENT_METHODS = ("reset", "step", "action_spec")
+
+
+def _is_environment(candidate) -> bool:
+    # An environment class is a loader: calling it makes the environment.
+    return not isinstance(candidate, type) and all(
+        callable(getattr(candidate, name, None)) for name in _ENVIRONMENT_METHODS
+    )
+
+
+def _load_environment(environment_loader):
+    """The environment itself, or what the loader returns when it is one."""
+    if _is_environment(environment_loader):
+        return environment_loader
+    if not callable(environment_loader):
+        raise TypeError(
+            f"environment_loader: expected {_EXPECTED_ENVIRONMENT}, got {environment_loader!r}"
+        )
+    try:
+        environment = environment_loader()
+    except Exception as error:
+        raise RuntimeError(
+            f"environment_loader: expected {_EXPECTED_ENVIRONMENT}; calling "
+            f"{environment_loader!r} raised {type(error).__name__}: {error}"
+        ) from error
+    if not _is_environment(environment):
+        raise TypeError(
+            f"environment_loader: expected {_EXPECTED_ENVIRONMENT}, got {environment_loader!r}, "
+            f"which returned {environment!r} (no reset, step and action_spec methods)"
+        )
+    return environment
+
+
+def _check_physics(environment, environment_loader) -> None:
+    """Raises TypeError unless the (reset) environment's physics exposes MuJoCo's structs."""
+    physics = getattr(environment, "physics", None)
+    model = getattr(getattr(physics, "model", None), "ptr", None)
+    data = getattr(getattr(physics, "data", None), "ptr", None)
+    if isinstance(model, mujoco.MjModel) and isinstance(data, mujoco.MjData):
+        return
+    if physics is None:
+        problem = "has no physics"
+    else:
+        problem = f"has a physics {physics!r} whose model.ptr / data.ptr are {model!r} / {data!r}"
+    source = "" if environment is environment_loader else f"{environment_loader!r} returned "
+    raise TypeError(
+        f"environment_loader: expected {_EXPECTED_ENVIRONMENT}, got {source}{environment!r}, "
+        f"which {problem}"
+    )
+
+
+def _control_timestep(environment) -> float:
+    control_timestep = getattr(environment, "control_timestep", None)
+    if callable(control_timestep):
+        return float(control_timestep())
+    return float(environment.physics.model.ptr.opt.timestep)
+
+
+def _default_action(spec):
+    """The action taken without a policy: what a spec's bounds suggest, per element."""
+    if isinstance(spec, (list, tuple)):
+        return type(spec)(_default_action(s) for s in spec)
+    if isinstance(spec, dict):
+        return {key: _default_action(value) for key, value in spec.items()}
+    action = np.zeros(spec.shape, spec.dtype)
+    if not hasattr(spec, "minimum"):
+        return action
+    minimum = np.broadcast_to(np.asarray(spec.minimum, float), spec.shape)
+    maximum = np.broadcast_to(np.asarray(spec.maximum, float), spec.shape)
+    low, high = np.isfinite(minimum), np.isfinite(maximum)
+    with np.errstate(invalid="ignore"):
+        resting = np.where(
+            low & high, (minimum + maximum) / 2, np.where(low, minimum, np.where(high, maximum, 0))
+        )
+    return resting.astype(spec.dtype)
 
 
 def _sleep_until(deadline: float) -> float:

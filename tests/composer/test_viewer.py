@@ -8,10 +8,12 @@ import subprocess
 import sys
 import textwrap
 
+import dm_env
 import mujoco
 import mujoco.viewer
 import numpy as np
 import pytest
+from dm_env import specs
 
 glfw = pytest.importorskip("glfw", reason="glfw (a mujoco dependency) cannot be imported")
 viewer = pytest.importorskip("composer.viewer", reason="mujoco.viewer cannot be imported")
@@ -83,6 +85,91 @@ def test_launch_rejects_bad_arguments_before_opening_a_window():
         viewer.launch(env, policy="random")
     with pytest.raises(ValueError, match="speed: expected"):
         viewer.launch(env, speed=100)
+
+
+class _EnvironmentWithoutPhysics(dm_env.Environment):
+    """A dm_env environment that has nothing for the viewer to show."""
+
+    def __init__(self, physics=None):
+        if physics is not None:
+            self.physics = physics
+
+    def reset(self):
+        return dm_env.restart({})
+
+    def step(self, action):
+        return dm_env.transition(0.0, {})
+
+    def observation_spec(self):
+        return {}
+
+    def action_spec(self):
+        return specs.Array((1,), float)
+
+
+def _load_nothing():
+    return None
+
+
+@pytest.mark.parametrize(
+    "environment_loader, got",
+    [
+        ("cartpole", "got 'cartpole'$"),
+        (None, "got None$"),
+        (42, "got 42$"),
+        (_load_nothing, r"got <function _load_nothing at .*>, which returned None \(no reset, "),
+        (
+            _EnvironmentWithoutPhysics,
+            r"got <class '.*_EnvironmentWithoutPhysics'> returned <.*>, which has no physics$",
+        ),
+        (
+            _EnvironmentWithoutPhysics(physics="not a physics"),
+            r"got <.*_EnvironmentWithoutPhysics object .*>, which has a physics 'not a physics' "
+            "whose model.ptr / data.ptr are None / None$",
+        ),
+    ],
+    ids=["string", "none", "number", "loader-returns-none", "no-physics", "bad-physics"],
+)
+def test_environment_loader_that_gives_no_viewable_environment_is_named_in_the_error(
+    environment_loader, got
+):
+    expected = (
+        r"^environment_loader: expected an environment \(with reset, step, action_spec and a "
+        r"physics whose model.ptr and data.ptr are a mujoco.MjModel and a mujoco.MjData\) or "
+        r"a callable returning one, "
+    )
+    with pytest.raises(TypeError, match=expected + got):
+        viewer.launch(environment_loader)
+
+
+def test_environment_loader_that_raises_is_named_in_the_error_chained_to_its_own():
+    def load():
+        raise KeyError("no such domain")
+
+    with pytest.raises(RuntimeError) as raised:
+        viewer.launch(load)
+    assert str(raised.value) == (
+        "environment_loader: expected an environment (with reset, step, action_spec and a "
+        "physics whose model.ptr and data.ptr are a mujoco.MjModel and a mujoco.MjData) or a "
+        f"callable returning one; calling {load!r} raised KeyError: 'no such domain'"
+    )
+    assert isinstance(raised.value.__cause__, KeyError)
+
+
+@pytest.mark.parametrize(
+    "window, message",
+    [
+        ({"title": 3}, "title: expected a string, got 3"),
+        ({"width": 0}, r"width: expected an integer >= 1 \(screen pixels\), got 0"),
+        ({"height": 480.0}, r"height: expected an integer >= 1 \(screen pixels\), got 480.0"),
+    ],
+)
+def test_bad_window_title_or_size_is_rejected_before_the_loader_is_called(window, message):
+    def load():
+        raise AssertionError("the loader must not be called")
+
+    with pytest.raises(ValueError, match=f"^{message}$"):
+        viewer.launch(load, **window)
 
 
 # The real window on a virtual X display.
@@ -177,10 +264,12 @@ def test_window_shows_scene_and_status_then_exits_cleanly_after_max_steps(displa
         process.kill()
     assert process.returncode == 0, errors
     assert json.loads(output) == {"steps": 40, "policy_calls": 40}
-    # The window (not the black root window around it) has the grey scene with the arm,
-    # and the status box in its top-left corner: dark panel, white text.
-    assert screen.std() > 20
-    assert len(np.unique(screen)) > 20
+    # The window (1024x768 by default, the whole virtual screen) has the grey scene with
+    # the arm, not one flat colour, and the status box in its top-left corner: dark panel,
+    # white text.
+    _, counts = np.unique(screen, return_counts=True)
+    assert len(counts) > 20
+    assert counts.max() < 0.99 * screen.size
     if not hasattr(mujoco.viewer.Handle, "set_texts"):
         pytest.skip(
             f"mujoco {mujoco.__version__}'s viewer has no Handle.set_texts: the status is "
@@ -335,4 +424,139 @@ def test_status_is_logged_once_a_second_where_the_viewer_cannot_draw_text(caplog
         display.show(object(), status)
     assert [record.getMessage() for record in caplog.records] == [
         "step 7, reward 0.500, return 2.250, speed 2x"
+    ]
+
+
+# dm_control's calling convention, through the import redirect.
+
+_DM_CONTROL_SCRIPT = """\
+import json, os, subprocess, sys
+
+import dm_env
+import numpy as np
+from dm_env import specs
+
+import dm_control
+from dm_control import composer, mjcf, viewer
+
+sys.path.insert(0, {scene_dir!r})
+from composer_scene import ReachTask
+
+
+def windows_of_this_process():
+    ids = subprocess.run(
+        ["xdotool", "search", "--pid", str(os.getpid())], capture_output=True, text=True
+    ).stdout.split()
+    return [
+        [
+            subprocess.run(["xdotool", what, i], capture_output=True, text=True).stdout
+            for what in ("getwindowname", "getwindowgeometry")
+        ]
+        for i in ids
+    ]
+
+
+class Pendulum(dm_env.Environment):
+    # Not composer: a plain dm_env environment on an mjcf.Physics, ten steps an episode.
+    actions = []
+    windows = []
+
+    def __init__(self):
+        self.physics = mjcf.Physics.from_xml_string(
+            "<mujoco model='pendulum'><option timestep='0.01'/><worldbody>"
+            "<body pos='0 0 1'><joint name='hinge' axis='0 1 0'/>"
+            "<geom type='capsule' fromto='0 0 0 0.5 0 0' size='0.05'/></body></worldbody>"
+            "<actuator><motor joint='hinge' ctrlrange='-1 3'/></actuator></mujoco>"
+        )
+        self._steps = 0
+
+    def reset(self):
+        self.physics.reset()
+        self._steps = 0
+        return dm_env.restart(self.physics.data.qpos.copy())
+
+    def step(self, action):
+        Pendulum.actions.append(np.asarray(action).tolist())
+        if len(Pendulum.actions) == 3:
+            Pendulum.windows = windows_of_this_process()
+        self.physics.set_control(action)
+        self.physics.step()
+        self._steps += 1
+        if self._steps == 10:
+            return dm_env.termination(1.0, self.physics.data.qpos.copy())
+        return dm_env.transition(1.0, self.physics.data.qpos.copy())
+
+    def observation_spec(self):
+        return specs.Array((1,), float)
+
+    def action_spec(self):
+        return specs.BoundedArray((1,), float, minimum=[-1.0], maximum=[3.0])
+
+
+# A loader (the class itself), no policy, dm_control's default title and size.
+pendulum = viewer.launch(Pendulum, max_steps=12)
+
+timesteps, reach_windows = [], []
+
+
+def policy(timestep):
+    timesteps.append(type(timestep).__name__)
+    if len(timesteps) == 3:
+        reach_windows.extend(windows_of_this_process())
+    return np.array([1.0, -1.0])
+
+
+# A composer environment and a policy, every dm_control argument positional.
+reach = viewer.launch(
+    lambda: composer.Environment(ReachTask(), random_state=0),
+    policy,
+    "Reach explorer",
+    800,
+    600,
+    max_steps=10,
+)
+print(json.dumps({{
+    "viewer": viewer.__name__,
+    "bare_dm_control": dm_control.__spec__.origin is None,
+    "pendulum": [pendulum.steps, pendulum.episodes, Pendulum.actions[:3], Pendulum.windows],
+    "reach": [reach.steps, sorted(set(timesteps)), reach_windows],
+}}))
+"""
+
+
+def test_dm_control_viewer_launch_through_the_redirect_shows_plain_and_composer_envs(
+    display, tmp_path
+):
+    if shutil.which("xdotool") is None:
+        pytest.skip("xdotool is not installed (apt-get install xdotool); .ci/run installs it")
+    probe = "import importlib.util as u; print(u.find_spec('dm_control') is None)"
+    if subprocess.run([sys.executable, "-c", probe], capture_output=True, text=True).stdout != (
+        "True\n"
+    ):
+        pytest.skip("dm_control is installed here; this test is about the bare stand-in")
+    script = tmp_path / "dm_control_viewer.py"
+    script.write_text(_DM_CONTROL_SCRIPT.format(scene_dir=str(_SCENE_DIR)))
+    result = subprocess.run(
+        [sys.executable, "-m", "composer.dm_control_compat", str(script)],
+        cwd=_REPO,
+        env=dict(os.environ, DISPLAY=display, MUJOCO_GL="glfw"),
+        capture_output=True,
+        text=True,
+        timeout=120,
+    )
+    assert result.returncode == 0, result.stderr
+    seen = json.loads(result.stdout)
+    assert seen["viewer"] == "composer.viewer"
+    assert seen["bare_dm_control"]
+    # Ten steps end the first episode; without a policy the action is the middle of the
+    # actuator's range [-1, 3].
+    steps, episodes, actions, windows = seen["pendulum"]
+    assert (steps, episodes, actions) == (12, 2, [[1.0]] * 3)
+    assert [(name.strip(), geometry.split()[-1]) for name, geometry in windows] == [
+        ("Explorer", "1024x768")
+    ]
+    steps, timestep_types, windows = seen["reach"]
+    assert (steps, timestep_types) == (10, ["TimeStep"])
+    assert [(name.strip(), geometry.split()[-1]) for name, geometry in windows] == [
+        ("Reach explorer", "800x600")
     ]
