@@ -242,7 +242,7 @@ def launch(
 
     Raises:
       ValueError: naming the argument for a bad `speed`, `max_steps`, `policy`, `title`,
-        `width` or `height`.
+        `width`, `height`, or for an `environment_loader` of None (as dm_control does).
       TypeError: `environment_loader` is neither an environment nor a callable returning
         one, or its environment's physics has no ``model.ptr`` / ``data.ptr``.
       RuntimeError: calling `environment_loader` raised (the error is chained).
@@ -333,6 +333,9 @@ def _load_environment(environment_loader):
     """The environment itself, or what the loader returns when it is one."""
     if _is_environment(environment_loader):
         return environment_loader
+    if environment_loader is None:
+        # dm_control's launch documents a ValueError for None.
+        raise ValueError(f"environment_loader: expected {_EXPECTED_ENVIRONMENT}, got None")
     if not callable(environment_loader):
         raise TypeError(
             f"environment_loader: expected {_EXPECTED_ENVIRONMENT}, got {environment_loader!r}"

@@ -115,7 +115,6 @@ def _load_nothing():
     "environment_loader, got",
     [
         ("cartpole", "got 'cartpole'$"),
-        (None, "got None$"),
         (42, "got 42$"),
         (_load_nothing, r"got <function _load_nothing at .*>, which returned None \(no reset, "),
         (
@@ -128,7 +127,7 @@ def _load_nothing():
             "whose model.ptr / data.ptr are None / None$",
         ),
     ],
-    ids=["string", "none", "number", "loader-returns-none", "no-physics", "bad-physics"],
+    ids=["string", "number", "loader-returns-none", "no-physics", "bad-physics"],
 )
 def test_environment_loader_that_gives_no_viewable_environment_is_named_in_the_error(
     environment_loader, got
@@ -140,6 +139,12 @@ def test_environment_loader_that_gives_no_viewable_environment_is_named_in_the_e
     )
     with pytest.raises(TypeError, match=expected + got):
         viewer.launch(environment_loader)
+
+
+def test_environment_loader_none_is_a_value_error_as_in_dm_control():
+    expected = r"^environment_loader: expected an environment .* got None$"
+    with pytest.raises(ValueError, match=expected):
+        viewer.launch(None)
 
 
 def test_environment_loader_that_raises_is_named_in_the_error_chained_to_its_own():
