@@ -114,7 +114,15 @@ class Physics:
     legacy_step = True
 
     def __init__(self, data: MjData | mujoco.MjData):
-        """Wraps ``data`` (a ``mujoco.MjData`` or a ``wrapper.MjData``) and runs forward."""
+        """Wraps ``data`` (a ``mujoco.MjData`` or a ``wrapper.MjData``) and runs forward.
+
+        A divergence warning from that first forward is logged, not raised (the state is
+        about to be set).
+
+        Raises:
+          PhysicsError: naming the model, when MuJoCo aborts that first forward
+            (``mujoco.FatalError``, e.g. arena memory exhausted on some releases).
+        """
         self._reload_from_data(data)
 
     def _reload_from_data(self, data: MjData | mujoco.MjData) -> None:
@@ -129,6 +137,15 @@ class Physics:
             self.after_reset()
         except PhysicsError as error:
             logging.warning(str(error))
+        except mujoco.FatalError as error:
+            # Some releases (3.17) abort the first forward of a model whose arena is too
+            # small instead of warning: the model cannot be simulated at all.
+            name = self._model.name
+            raise PhysicsError(
+                f"MuJoCo could not run the first forward of the model "
+                f"{repr(name) if name else '(unnamed)'}: {str(error).strip()} (a model that "
+                "needs more memory than <size memory=...> gives fails here)"
+            ) from error
 
     def _reload_from_model(self, model: MjModel | mujoco.MjModel) -> None:
         """(Re)builds this Physics with fresh data for ``model``."""

@@ -536,13 +536,38 @@ def test_forward_raises_when_mujoco_warns(physics):
 def test_construction_logs_a_warning_raised_by_its_first_forward(caplog):
     # Six overlapping free spheres make more constraints than 16 KB of arena memory holds.
     bodies = "<body><freejoint/><geom size='1'/></body>" * 6
-    xml = f"<mujoco><size memory='16K'/><worldbody>{bodies}</worldbody></mujoco>"
-    with caplog.at_level(logging.WARNING):
-        Physics.from_xml_string(xml)
+    xml = f"<mujoco model='crowd'><size memory='16K'/><worldbody>{bodies}</worldbody></mujoco>"
+    try:
+        with caplog.at_level(logging.WARNING):
+            Physics.from_xml_string(xml)
+    except PhysicsError as error:
+        # mujoco 3.17 aborts that forward (FatalError) instead of warning.
+        assert str(error).startswith(
+            "MuJoCo could not run the first forward of the model 'crowd': "
+        )
+        assert isinstance(error.__cause__, mujoco.FatalError)
+        return
     messages = [record.getMessage() for record in caplog.records]
     # mujoco 3.3 names the full arena after contacts, 4.0 after constraints.
     expected = r"Physics state is invalid\. Warning\(s\) raised: mjWARN_(CNSTR|CONTACT)FULL"
     assert any(re.fullmatch(expected, message) for message in messages)
+
+
+def test_construction_turns_an_aborted_first_forward_into_a_physics_error_naming_the_model(
+    monkeypatch,
+):
+    def aborting_forward(model, data):
+        raise mujoco.FatalError("mj_stackAlloc: out of memory, stack overflow")
+
+    model = mujoco.MjModel.from_xml_string("<mujoco model='cramped'/>")
+    monkeypatch.setattr(mujoco, "mj_forward", aborting_forward)
+    with pytest.raises(PhysicsError) as raised:
+        Physics.from_model(model)
+    assert str(raised.value) == (
+        "MuJoCo could not run the first forward of the model 'cramped': mj_stackAlloc: out of "
+        "memory, stack overflow (a model that needs more memory than <size memory=...> gives "
+        "fails here)"
+    )
 
 
 def test_is_dirty_is_false_after_forward_and_on_copies(physics):
