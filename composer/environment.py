@@ -344,7 +344,8 @@ class Environment(dm_env.Environment):
         """Starts a new episode and returns its first TimeStep.
 
         Tries up to `max_reset_attempts` times while a hook raises
-        `EpisodeInitializationError`; the last such error propagates.
+        `EpisodeInitializationError`, logging each failed attempt as a warning; the last
+        such error propagates.
         """
         if self._fixed_random_state is not None:
             self._random_state.set_state(self._fixed_random_state)
@@ -355,8 +356,9 @@ class Environment(dm_env.Environment):
             except EpisodeInitializationError as error:
                 if attempt >= self._max_reset_attempts:
                     raise
-                logging.error(
-                    "Episode initialization failed (attempt %d of %d): %r",
+                # The caller asked for retries, so a failed attempt is expected: a warning.
+                logging.warning(
+                    "Episode initialization failed (attempt %d of %d), retrying: %r",
                     attempt,
                     self._max_reset_attempts,
                     error,
