@@ -26,6 +26,8 @@ __all__ = [
 
 
 _FIRST, _MID, _LAST = dm_env.StepType.FIRST, dm_env.StepType.MID, dm_env.StepType.LAST
+# How far from a whole number of control steps a time limit may be and still count as one.
+_WHOLE_STEPS_TOLERANCE = 1e-6
 
 
 class EpisodeInitializationError(RuntimeError):
@@ -43,6 +45,22 @@ def _positive_int(name: str, value) -> int:
     if isinstance(value, bool) or not isinstance(value, numbers.Integral) or value < 1:
         raise ValueError(f"{name}: expected an integer >= 1, got {value!r}")
     return int(value)
+
+
+def _time_limit_warning(time_limit: float, control_timestep: float) -> str | None:
+    """The warning for a time limit that is not a whole number of control steps, or None."""
+    steps = time_limit / control_timestep
+    if math.isinf(steps) or abs(steps - round(steps)) <= _WHOLE_STEPS_TOLERANCE:
+        return None
+    last_step = math.ceil(steps)
+    multiples = [f"{n * control_timestep:g} s" for n in (last_step - 1, last_step) if n > 0]
+    steps_taken = f"{last_step} step{'s' if last_step > 1 else ''}"
+    return (
+        f"time_limit={time_limit:g} s is not a multiple of the control timestep "
+        f"{control_timestep:g} s: an episode ends at the first step that reaches it, after "
+        f"{steps_taken} at t={last_step * control_timestep:g} s; use a multiple of the "
+        f"control timestep ({' or '.join(multiples)}) to end episodes at the time limit"
+    )
 
 
 def _collected(observables) -> tuple:
@@ -72,7 +90,9 @@ class Environment(dm_env.Environment):
     Args:
       task: the `composer.Task` to run.
       time_limit: seconds of simulated time after which an episode ends (LAST, with
-        the task's discount).
+        the task's discount): the first step that reaches it is the last. A time limit
+        that is not a multiple of the control timestep gives a `UserWarning` once (and
+        again if the control timestep changes).
       random_state: an int seed or an `np.random.RandomState`; every hook gets it.
       n_sub_steps: physics steps per control step, overriding the task's
         `physics_steps_per_control_step`.
@@ -159,8 +179,10 @@ class Environment(dm_env.Environment):
         self._compiled_count = None
         self._reset_next_step = True
         self._episode_mjcf_prepared = False
+        self._time_limit_checked_for = None
         self._update_model()
         self._observation_updater.reset(self._physics_proxy, self._random_state)
+        self._warn_if_time_limit_is_not_whole_steps()
         self._fixed_random_state = self._random_state.get_state() if fixed_initial_state else None
 
     # Properties and specs.
@@ -179,6 +201,11 @@ class Environment(dm_env.Environment):
         return self._task
 
     @property
+    def time_limit(self) -> float:
+        """Seconds of simulated time after which an episode ends; inf for no limit."""
+        return self._time_limit
+
+    @property
     def random_state(self) -> np.random.RandomState:
         return self._random_state
 
@@ -187,6 +214,17 @@ class Environment(dm_env.Environment):
         if self._overridden_n_sub_steps is not None:
             return self._physics.timestep() * self._overridden_n_sub_steps
         return self._task.control_timestep
+
+    def _warn_if_time_limit_is_not_whole_steps(self) -> None:
+        """Warns, once per control timestep, when the time limit falls between two steps."""
+        control_timestep = self.control_timestep()
+        if control_timestep == self._time_limit_checked_for:
+            return
+        self._time_limit_checked_for = control_timestep
+        message = _time_limit_warning(self._time_limit, control_timestep)
+        if message is not None:
+            # Points at the caller of the constructor or of reset().
+            warnings.warn(message, UserWarning, stacklevel=3)
 
     def add_extra_hook(self, hook_name: str, hook_callable) -> None:
         """Calls `hook_callable` after the task's and entities' hooks named `hook_name`.
@@ -352,7 +390,7 @@ class Environment(dm_env.Environment):
         attempt = 1
         while True:
             try:
-                return self._reset_attempt()
+                timestep = self._reset_attempt()
             except EpisodeInitializationError as error:
                 if attempt >= self._max_reset_attempts:
                     raise
@@ -364,6 +402,10 @@ class Environment(dm_env.Environment):
                     error,
                 )
                 attempt += 1
+            else:
+                # The task may have changed its control timestep since the last episode.
+                self._warn_if_time_limit_is_not_whole_steps()
+                return timestep
 
     def _reset_attempt(self) -> dm_env.TimeStep:
         # Hooks replaced on the task or an entity since the last episode take effect now.
