@@ -15,6 +15,7 @@ from composer import observation
 from composer.action_validation import action_validator
 from composer.hooks import HOOK_NAMES, EnvironmentHooks
 from composer.model_snapshot import ModelSnapshot, snapshots_supported
+from composer.weak_physics import WeakPhysics
 from mjcf.physics import compile_mjcf_model
 
 __all__ = [
@@ -172,6 +173,7 @@ class Environment(dm_env.Environment):
         self._hooks = EnvironmentHooks(task)
         self._physics = None
         self._physics_proxy = None
+        self._physics_view = None
         self._snapshot = None
         self._observation_updater = None
         self._n_sub_steps = None
@@ -188,13 +190,17 @@ class Environment(dm_env.Environment):
     # Properties and specs.
 
     @property
-    def physics(self):
-        """A `weakref.proxy` to the current `mjcf.Physics`.
+    def physics(self) -> WeakPhysics | None:
+        """A weak reference to the current `mjcf.Physics`, used like the Physics itself.
 
-        A recompile that changes the model's structure replaces the Physics, after
-        which old proxies raise ReferenceError; other resets keep the same Physics.
+        It does not keep the Physics alive: the Physics belongs to this environment and is
+        freed with it, so keep the environment for as long as you use its physics
+        (`env = make_env()` and then `env.physics`, not `make_env().physics`). `close()`
+        frees it, and a reset that recompiles a changed model structure replaces it (other
+        resets keep the same Physics). Using an old reference after that raises a
+        ReferenceError that says which of these happened. None after `close()`.
         """
-        return self._physics_proxy
+        return self._physics_view
 
     @property
     def task(self):
@@ -278,6 +284,7 @@ class Environment(dm_env.Environment):
             self._physics.free()
         self._physics = None
         self._physics_proxy = None
+        self._physics_view = None
         self._snapshot = None
 
     def __reduce_ex__(self, protocol):
@@ -346,6 +353,7 @@ class Environment(dm_env.Environment):
         physics.legacy_step = self._legacy_step
         self._physics = physics
         self._physics_proxy = weakref.proxy(physics)
+        self._physics_view = WeakPhysics(physics, self)
         self._data = physics.data.ptr
         self._ctrl = self._data.ctrl
         self._snapshot = ModelSnapshot(physics.model.ptr) if snapshots_supported() else None

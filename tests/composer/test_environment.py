@@ -1,9 +1,9 @@
 """composer.Environment: the dm_env loop, specs, time limits and action checking."""
 
 import copy
+import gc
 import pickle
 import warnings
-import weakref
 
 import dm_env
 import numpy as np
@@ -190,9 +190,66 @@ def test_environment_physics_refuses_elements_of_another_model():
         env.physics.bind(stray.joints)
 
 
-def test_physics_property_is_a_weak_proxy():
+def test_physics_property_reads_and_writes_through_to_the_physics():
     env = composer.Environment(ReachTask())
-    assert isinstance(env.physics, weakref.ProxyType)
+    env.reset()
+    physics = env.physics
+    assert physics is env.physics
+    assert isinstance(physics, mjcf.Physics)
+    physics.legacy_step = False
+    physics.bind(env.task.arm.joints).qpos = [0.3, -0.2]
+    assert env.step(np.zeros(2)).mid()
+    assert physics.data.time == pytest.approx(0.02)
+    assert env.physics.legacy_step is False
+
+
+class MarkedEveryEpisode(ReachTask):
+    """Adds a site before every episode: a structural change, so each reset makes a new
+    Physics."""
+
+    def initialize_episode_mjcf(self, random_state):
+        count = len(self.arena.mjcf_model.worldbody.get_children("site"))
+        self.arena.mjcf_model.worldbody.add("site", name=f"marker_{count}")
+
+
+def test_physics_of_a_garbage_collected_environment_says_to_keep_the_environment():
+    physics = composer.Environment(ReachTask()).physics
+    gc.collect()
+    with pytest.raises(ReferenceError) as raised:
+        physics.data.time  # noqa: B018
+    assert str(raised.value) == (
+        "env.physics was used after its composer.Environment was garbage-collected, which "
+        "freed the Physics: keep a reference to the environment for as long as you use its "
+        "physics (env = make_env() and then env.physics, not make_env().physics), or keep a "
+        "copy made with env.physics.copy()"
+    )
+
+
+def test_physics_after_close_says_it_was_closed():
+    env = composer.Environment(ReachTask())
+    physics = env.physics
+    env.close()
+    with pytest.raises(ReferenceError) as raised:
+        physics.bind(env.task.arm.joints)
+    assert str(raised.value) == (
+        "env.physics was used after env.close() freed the Physics: call env.reset() and "
+        "read env.physics again"
+    )
+
+
+def test_physics_replaced_at_a_reset_says_to_read_it_again():
+    env = composer.Environment(MarkedEveryEpisode())
+    env.reset()
+    physics = env.physics
+    env.reset()
+    with pytest.raises(ReferenceError) as raised:
+        physics.legacy_step = False
+    assert str(raised.value) == (
+        "env.physics was used after the environment replaced its Physics (at a reset that "
+        "recompiled a changed model structure, or the first reset after close()): read "
+        "env.physics again after each reset instead of keeping it"
+    )
+    assert env.physics.data.time == 0.0
 
 
 def test_task_and_random_state_properties():
