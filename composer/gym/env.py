@@ -10,10 +10,14 @@ Contract of the adapter (`GymnasiumEnv`):
 - `step` returns `(observation, reward, terminated, truncated, info)`: an episode that
   ends with discount 0 (the task ended it) is *terminated*, one that ends with a
   non-zero discount (the time limit) is *truncated*; `info['discount']` is the discount.
+  The reward is checked against the wrapped environment's `reward_spec()`, which must
+  describe one number.
 - `render()` draws the `camera` with `mujoco`'s off-screen renderer: (height, width, 3)
   uint8 for 'rgb_array', (height, width) float32 metres for 'depth_array'.
 """
 
+import math
+from collections.abc import Callable
 from typing import Any, ClassVar
 
 import dm_env
@@ -25,6 +29,43 @@ from composer.gym import spaces as spec_spaces
 __all__ = ["GymnasiumEnv"]
 
 _RENDER_MODES = ("rgb_array", "depth_array")
+
+
+def _reward_converter(env: dm_env.Environment) -> Callable[[Any], float]:
+    """Returns the check that turns the rewards of `env` into floats, from its reward spec.
+
+    Raises:
+      ValueError: if the reward spec is not that of one number.
+    """
+    spec = env.reward_spec()
+    if not isinstance(spec, dm_env.specs.Array) or spec.shape != ():
+        raise ValueError(
+            f"{type(env).__name__}.reward_spec(): expected the spec of one number (Gymnasium's "
+            f"step returns one float reward), got {spec!r}"
+        )
+    bounded = isinstance(spec, dm_env.specs.BoundedArray)
+    low = float(spec.minimum) if bounded else -math.inf
+    high = float(spec.maximum) if bounded else math.inf
+    expected = "one number" if not bounded else f"one number in [{low:g}, {high:g}]"
+    said = f"as {type(env).__name__}.reward_spec() says ({spec!r})"
+
+    def to_float(reward) -> float:
+        if not isinstance(reward, float):
+            array = np.asarray(reward)
+            if array.shape != ():
+                raise ValueError(
+                    f"reward: expected {expected}, {said}, got {reward!r} of shape "
+                    f"{array.shape}; make the task's get_reward return a float"
+                )
+            try:
+                reward = float(array)
+            except (TypeError, ValueError):
+                raise ValueError(f"reward: expected {expected}, {said}, got {reward!r}") from None
+        if bounded and not low <= reward <= high:
+            raise ValueError(f"reward: expected {expected}, {said}, got {reward!r}")
+        return float(reward)
+
+    return to_float
 
 
 class GymnasiumEnv(gymnasium.Env):
@@ -46,8 +87,8 @@ class GymnasiumEnv(gymnasium.Env):
         features (key 'features') and the images.
 
     Raises:
-      ValueError: for an unknown `render_mode`, or a render mode for an environment
-        without `physics`.
+      ValueError: for an unknown `render_mode`, a render mode for an environment
+        without `physics`, or a reward spec that is not that of one number.
       NotImplementedError: for `render_mode='human'`.
     """
 
@@ -95,6 +136,7 @@ class GymnasiumEnv(gymnasium.Env):
             self._layout = None
             self.observation_space = spec_spaces.space_from_spec(observation_spec)
         self.action_space = spec_spaces.box_from_spec(env.action_spec())
+        self._reward = _reward_converter(env)
         self._episode_over = True
 
     @property
@@ -140,6 +182,8 @@ class GymnasiumEnv(gymnasium.Env):
         Raises:
           RuntimeError: if the episode is over (or never started) and `reset` was not
             called.
+          ValueError: naming the reward, if it does not match the wrapped environment's
+            `reward_spec()` (one number, within its bounds if it has any).
         """
         if self._episode_over:
             raise RuntimeError(
@@ -154,7 +198,7 @@ class GymnasiumEnv(gymnasium.Env):
             truncated = not terminated
         return (
             self._observation(timestep.observation),
-            float(timestep.reward),
+            self._reward(timestep.reward),
             terminated,
             truncated,
             {"discount": discount},
