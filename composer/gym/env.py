@@ -5,6 +5,9 @@ Contract of the adapter (`GymnasiumEnv`):
 - `observation_space` and `action_space` come from the wrapped environment's specs
   (see `composer.gym.spaces`): observations are the wrapped environment's own dict of
   arrays, unchanged, or with `flatten_observations` one `Box` of every feature.
+- `observation_space` follows the wrapped environment's observation spec at every
+  `reset`: observables enabled, disabled or reconfigured after wrapping (which a
+  `composer.Environment` applies at its next reset) change it there, never mid-episode.
 - `reset(seed=s)` reseeds the wrapped environment's `random_state` in place, so the same
   `s` gives the same episode; `reset()` without a seed continues the random sequence.
 - `step` returns `(observation, reward, terminated, truncated, info)`: an episode that
@@ -17,7 +20,7 @@ Contract of the adapter (`GymnasiumEnv`):
 """
 
 import math
-from collections.abc import Callable
+from collections.abc import Callable, Mapping
 from typing import Any, ClassVar
 
 import dm_env
@@ -29,6 +32,13 @@ from composer.gym import spaces as spec_spaces
 __all__ = ["GymnasiumEnv"]
 
 _RENDER_MODES = ("rgb_array", "depth_array")
+
+
+def _spec_signature(spec) -> Any:
+    """What two observation specs must share to give the same space: names, kinds, specs."""
+    if isinstance(spec, Mapping):
+        return tuple((name, type(value), _spec_signature(value)) for name, value in spec.items())
+    return spec
 
 
 def _reward_converter(env: dm_env.Environment) -> Callable[[Any], float]:
@@ -84,7 +94,17 @@ class GymnasiumEnv(gymnasium.Env):
       flatten_observations: concatenate every feature observation, in the observation
         spec's order and each flattened in C order, into one `Box`. Camera images (uint8
         with at least 3 axes) stay separate: with any, observations are a dict of the
-        features (key 'features') and the images.
+        features (key 'features') and the images. For a `composer.Environment` the spec's
+        order is the task's observables first, then each entity's in the order of
+        `task.root_entity.iter_entities()` (the root first, then depth first), each
+        entity's in the order of its `observables.as_dict()` (declared ones by name).
+
+    Observable changes: `observation_space` is rebuilt at `reset` whenever the wrapped
+    environment's observation spec changed (an observable enabled, disabled or given
+    another buffer size since the last reset), so it always describes the observations
+    `reset` and `step` return. Gymnasium wrappers that read `env.observation_space` follow
+    it; vector environments (`ThreadedVectorEnv`, `RayVectorEnv`) fix their spaces when
+    built, so change observables before building one.
 
     Raises:
       ValueError: for an unknown `render_mode`, a render mode for an environment
@@ -128,13 +148,9 @@ class GymnasiumEnv(gymnasium.Env):
         self.metadata = dict(self.metadata)
         if hasattr(env, "control_timestep"):
             self.metadata["render_fps"] = 1.0 / env.control_timestep()
-        observation_spec = env.observation_spec()
-        if flatten_observations:
-            self._layout = spec_spaces.feature_layout(observation_spec)
-            self.observation_space = spec_spaces.flat_space(observation_spec, self._layout)
-        else:
-            self._layout = None
-            self.observation_space = spec_spaces.space_from_spec(observation_spec)
+        self._flatten = flatten_observations
+        self._observation_signature = None
+        self._follow_observation_spec()
         self.action_space = spec_spaces.box_from_spec(env.action_spec())
         self._reward = _reward_converter(env)
         self._episode_over = True
@@ -168,6 +184,7 @@ class GymnasiumEnv(gymnasium.Env):
                 )
             random_state.seed(seed)
         timestep = self._env.reset()
+        self._follow_observation_spec()
         self._episode_over = False
         return self._observation(timestep.observation), {}
 
@@ -218,6 +235,20 @@ class GymnasiumEnv(gymnasium.Env):
     def close(self) -> None:
         """Closes the wrapped environment."""
         self._env.close()
+
+    def _follow_observation_spec(self) -> None:
+        """Rebuilds `observation_space` if the wrapped environment's observation spec changed."""
+        observation_spec = self._env.observation_spec()
+        signature = _spec_signature(observation_spec)
+        if signature == self._observation_signature:
+            return
+        self._observation_signature = signature
+        if self._flatten:
+            self._layout = spec_spaces.feature_layout(observation_spec)
+            self.observation_space = spec_spaces.flat_space(observation_spec, self._layout)
+        else:
+            self._layout = None
+            self.observation_space = spec_spaces.space_from_spec(observation_spec)
 
     def _observation(self, observation):
         layout = self._layout

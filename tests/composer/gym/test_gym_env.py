@@ -152,6 +152,59 @@ def test_a_reward_within_its_bounded_spec_is_returned_as_a_float():
     assert type(reward) is float and reward == 0.5
 
 
+@pytest.mark.parametrize("flatten", [False, True])
+def test_observation_space_follows_an_observable_disabled_after_wrapping(flatten):
+    env = GymnasiumEnv(slider_environment(), flatten_observations=flatten)
+    env.reset(seed=0)
+    env.dm_env.task.task_observables["velocity"].enabled = False
+    observation, _ = env.reset(seed=0)
+    if flatten:
+        assert observation.shape == env.observation_space.shape == (1,)
+    else:
+        assert list(observation) == list(env.observation_space.spaces) == ["position"]
+    assert env.observation_space.contains(observation)
+    assert env.observation_space.contains(env.step(np.zeros(1))[0])
+
+
+def test_observation_space_follows_a_buffer_size_changed_after_wrapping():
+    env = GymnasiumEnv(slider_environment())
+    env.dm_env.task.task_observables["position"].buffer_size = 3
+    assert env.observation_space["position"].shape == (1, 1)
+    observation, _ = env.reset(seed=0)
+    assert observation["position"].shape == env.observation_space["position"].shape == (3, 1)
+    assert env.observation_space.contains(observation)
+
+
+def test_observation_space_changes_at_reset_not_in_the_middle_of_an_episode():
+    env = GymnasiumEnv(slider_environment())
+    env.reset(seed=0)
+    space = env.observation_space
+    env.dm_env.task.task_observables["velocity"].enabled = False
+    observation = env.step(np.zeros(1))[0]
+    assert env.observation_space is space
+    assert space.contains(observation)
+
+
+def test_observation_space_is_kept_when_reset_changes_no_observable():
+    env = GymnasiumEnv(slider_environment())
+    space = env.observation_space
+    env.reset(seed=0)
+    env.reset(seed=1)
+    assert env.observation_space is space
+
+
+def test_env_checker_passes_after_an_observable_is_disabled():
+    env = GymnasiumEnv(slider_environment(time_limit=0.2), flatten_observations=True)
+    env.dm_env.task.task_observables["velocity"].enabled = False
+    env.reset(seed=0)
+    with warnings.catch_warnings():
+        # An observation outside its space is a warning too: make it an error. The advice
+        # about the unbounded Box is not one.
+        warnings.simplefilter("error")
+        warnings.filterwarnings("ignore", message=".*value is -?infinity")
+        check_env(env, skip_render_check=True)
+
+
 def test_step_after_the_episode_ended_asks_for_reset():
     env = GymnasiumEnv(slider_environment(end_after_steps=1))
     with pytest.raises(RuntimeError, match="call reset"):
