@@ -438,6 +438,10 @@ class Environment(dm_env.Environment):
     def step(self, action) -> dm_env.TimeStep:
         """Applies `action` for one control step and returns the resulting TimeStep.
 
+        The action's bounds are not checked: as in dm_control, a value outside an
+        actuator's `ctrlrange` is written to `ctrl` unchanged, and MuJoCo clamps it to
+        the range when it computes the actuator's force.
+
         Raises:
           ValueError: if `action` does not match `action_spec()` in shape, cannot be
             cast to its dtype, or holds NaN or infinity; nothing is stepped.
