@@ -51,7 +51,7 @@ class BuiltAttribute:
         self._owner = owner
         self._name = name
 
-    def __get__(self, instance, owner=None):
+    def __get__(self, instance: object, owner: type | None = None) -> "BuiltAttribute":
         if instance is None:
             return self
         # Entity.__init__ sets `_parent` before anything else.
