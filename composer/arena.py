@@ -3,7 +3,7 @@
 import numpy as np
 
 import mjcf
-from composer.entity import Entity
+from composer.entity import BuiltAttribute, Entity
 
 
 class Arena(Entity):
@@ -11,13 +11,20 @@ class Arena(Entity):
 
     The model sets the global options every Composer scene shares: radian angles,
     elliptic friction cones with noslip iterations, a 2 ms timestep, a soft
-    headlight and small visual scales. It has no floor or walls; subclasses add
-    their own.
+    headlight and small visual scales. It has no floor, walls or cameras; a subclass
+    adds its own in `_build`, after calling `super()._build(name=...)` to create the
+    model (`self.mjcf_model`). The docs page "Write your own task" shows one.
 
     Args (to the constructor):
       name: the model name, which scopes nothing (the arena is the root) but names
         the scene; defaults to 'base', as in dm_control.
     """
+
+    _mjcf_root = BuiltAttribute(
+        "{cls} has no MJCF model ({name!r}): {build_owner}._build did not call "
+        "super()._build(). Start {build_owner}._build with super()._build(name=...), which "
+        "creates the arena's model and its shared settings, then add to self.mjcf_model"
+    )
 
     def _build(self, name: str | None = None) -> None:
         self._mjcf_root = mjcf.RootElement(model=name or "base")

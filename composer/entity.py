@@ -13,6 +13,61 @@ from composer.entity_observables import Observables
 from composer.observation import observable
 
 _NOT_ATTACHED = "{entity} is not attached to a parent entity, so it has no attachment frame"
+_INIT_NOT_CALLED = (
+    "{cls} was never set up by composer.Entity.__init__ (it has no {name!r}): "
+    "{init_owner}.__init__ replaces Entity.__init__ without calling it. Build the model in "
+    "_build(self, ...), which Entity.__init__ calls with the constructor's arguments, instead "
+    "of overriding __init__; or call super().__init__(...) in {init_owner}.__init__"
+)
+
+
+def _first_definer(instance, method: str, base: type) -> str:
+    """The name of the first class in `instance`'s MRO, before `base`, that defines `method`."""
+    for cls in type(instance).__mro__:
+        if cls is base:
+            break
+        if method in vars(cls):
+            return cls.__name__
+    return type(instance).__name__
+
+
+class BuiltAttribute:
+    """An attribute that an entity's set-up gives each instance, explained if read before.
+
+    Declared on an `Entity` subclass (`_mjcf_root = BuiltAttribute(hint)`). The instance's
+    own attribute of the same name hides it once set; read before that, it raises an
+    AttributeError that names the set-up step that never ran and how to fix the subclass,
+    instead of "'Stage' object has no attribute '_mjcf_root'":
+
+    - `Entity.__init__` never ran (a subclass overrides `__init__` without calling it);
+    - otherwise `hint`, formatted with `cls` (the instance's class), `name` (the attribute)
+      and `build_owner` (the subclass whose `_build` overrides the declaring class's).
+    """
+
+    def __init__(self, hint: str | None = None):
+        self._hint = hint
+
+    def __set_name__(self, owner: type, name: str) -> None:
+        self._owner = owner
+        self._name = name
+
+    def __get__(self, instance: object, owner: type | None = None) -> "BuiltAttribute":
+        if instance is None:
+            return self
+        # Entity.__init__ sets `_parent` before anything else.
+        if self._hint is None or "_parent" not in vars(instance):
+            message = _INIT_NOT_CALLED.format(
+                cls=type(instance).__name__,
+                name=self._name,
+                init_owner=_first_definer(instance, "__init__", Entity),
+            )
+        else:
+            message = self._hint.format(
+                cls=type(instance).__name__,
+                name=self._name,
+                build_owner=_first_definer(instance, "_build", self._owner),
+            )
+        raise AttributeError(message)
 
 
 class Entity(abc.ABC):
@@ -29,7 +84,18 @@ class Entity(abc.ABC):
     hooks (`initialize_episode_mjcf`, `after_compile`, `initialize_episode`,
     `before_step`, `before_substep`, `after_substep`, `after_step`) of every entity
     in the tree that overrides them; the defaults do nothing.
+
+    A subclass customises construction in `_build`, not `__init__`; one that overrides
+    `__init__` must call `super().__init__(...)`, or its first use says it never did.
     """
+
+    _parent = BuiltAttribute()
+    _attached = BuiltAttribute()
+    _observables = BuiltAttribute(
+        "{cls}.observables do not exist yet: Entity.__init__ builds them (with "
+        "_build_observables) after _build returns, so _build cannot use them; configure them "
+        "after construction, or pass observable_options to the constructor"
+    )
 
     def __init__(self, *args, **kwargs):
         self._parent = None

@@ -15,6 +15,7 @@ from composer import observation
 from composer.action_validation import action_validator
 from composer.hooks import HOOK_NAMES, EnvironmentHooks
 from composer.model_snapshot import ModelSnapshot, snapshots_supported
+from composer.weak_physics import WeakPhysics
 from mjcf.physics import compile_mjcf_model
 
 __all__ = [
@@ -26,6 +27,8 @@ __all__ = [
 
 
 _FIRST, _MID, _LAST = dm_env.StepType.FIRST, dm_env.StepType.MID, dm_env.StepType.LAST
+# How far from a whole number of control steps a time limit may be and still count as one.
+_WHOLE_STEPS_TOLERANCE = 1e-6
 
 
 class EpisodeInitializationError(RuntimeError):
@@ -43,6 +46,22 @@ def _positive_int(name: str, value) -> int:
     if isinstance(value, bool) or not isinstance(value, numbers.Integral) or value < 1:
         raise ValueError(f"{name}: expected an integer >= 1, got {value!r}")
     return int(value)
+
+
+def _time_limit_warning(time_limit: float, control_timestep: float) -> str | None:
+    """The warning for a time limit that is not a whole number of control steps, or None."""
+    steps = time_limit / control_timestep
+    if math.isinf(steps) or abs(steps - round(steps)) <= _WHOLE_STEPS_TOLERANCE:
+        return None
+    last_step = math.ceil(steps)
+    multiples = [f"{n * control_timestep:g} s" for n in (last_step - 1, last_step) if n > 0]
+    steps_taken = f"{last_step} step{'s' if last_step > 1 else ''}"
+    return (
+        f"time_limit={time_limit:g} s is not a multiple of the control timestep "
+        f"{control_timestep:g} s: an episode ends at the first step that reaches it, after "
+        f"{steps_taken} at t={last_step * control_timestep:g} s; use a multiple of the "
+        f"control timestep ({' or '.join(multiples)}) to end episodes at the time limit"
+    )
 
 
 def _collected(observables) -> tuple:
@@ -72,7 +91,9 @@ class Environment(dm_env.Environment):
     Args:
       task: the `composer.Task` to run.
       time_limit: seconds of simulated time after which an episode ends (LAST, with
-        the task's discount).
+        the task's discount): the first step that reaches it is the last. A time limit
+        that is not a multiple of the control timestep gives a `UserWarning` once (and
+        again if the control timestep changes).
       random_state: an int seed or an `np.random.RandomState`; every hook gets it.
       n_sub_steps: physics steps per control step, overriding the task's
         `physics_steps_per_control_step`.
@@ -152,6 +173,7 @@ class Environment(dm_env.Environment):
         self._hooks = EnvironmentHooks(task)
         self._physics = None
         self._physics_proxy = None
+        self._physics_view = None
         self._snapshot = None
         self._observation_updater = None
         self._n_sub_steps = None
@@ -159,24 +181,35 @@ class Environment(dm_env.Environment):
         self._compiled_count = None
         self._reset_next_step = True
         self._episode_mjcf_prepared = False
+        self._time_limit_checked_for = None
         self._update_model()
         self._observation_updater.reset(self._physics_proxy, self._random_state)
+        self._warn_if_time_limit_is_not_whole_steps()
         self._fixed_random_state = self._random_state.get_state() if fixed_initial_state else None
 
     # Properties and specs.
 
     @property
-    def physics(self):
-        """A `weakref.proxy` to the current `mjcf.Physics`.
+    def physics(self) -> WeakPhysics | None:
+        """A weak reference to the current `mjcf.Physics`, used like the Physics itself.
 
-        A recompile that changes the model's structure replaces the Physics, after
-        which old proxies raise ReferenceError; other resets keep the same Physics.
+        It does not keep the Physics alive: the Physics belongs to this environment and is
+        freed with it, so keep the environment for as long as you use its physics
+        (`env = make_env()` and then `env.physics`, not `make_env().physics`). `close()`
+        frees it, and a reset that recompiles a changed model structure replaces it (other
+        resets keep the same Physics). Using an old reference after that raises a
+        ReferenceError that says which of these happened. None after `close()`.
         """
-        return self._physics_proxy
+        return self._physics_view
 
     @property
     def task(self):
         return self._task
+
+    @property
+    def time_limit(self) -> float:
+        """Seconds of simulated time after which an episode ends; inf for no limit."""
+        return self._time_limit
 
     @property
     def random_state(self) -> np.random.RandomState:
@@ -187,6 +220,17 @@ class Environment(dm_env.Environment):
         if self._overridden_n_sub_steps is not None:
             return self._physics.timestep() * self._overridden_n_sub_steps
         return self._task.control_timestep
+
+    def _warn_if_time_limit_is_not_whole_steps(self) -> None:
+        """Warns, once per control timestep, when the time limit falls between two steps."""
+        control_timestep = self.control_timestep()
+        if control_timestep == self._time_limit_checked_for:
+            return
+        self._time_limit_checked_for = control_timestep
+        message = _time_limit_warning(self._time_limit, control_timestep)
+        if message is not None:
+            # Points at the caller of the constructor or of reset().
+            warnings.warn(message, UserWarning, stacklevel=3)
 
     def add_extra_hook(self, hook_name: str, hook_callable) -> None:
         """Calls `hook_callable` after the task's and entities' hooks named `hook_name`.
@@ -240,6 +284,7 @@ class Environment(dm_env.Environment):
             self._physics.free()
         self._physics = None
         self._physics_proxy = None
+        self._physics_view = None
         self._snapshot = None
 
     def __reduce_ex__(self, protocol):
@@ -308,6 +353,7 @@ class Environment(dm_env.Environment):
         physics.legacy_step = self._legacy_step
         self._physics = physics
         self._physics_proxy = weakref.proxy(physics)
+        self._physics_view = WeakPhysics(physics, self)
         self._data = physics.data.ptr
         self._ctrl = self._data.ctrl
         self._snapshot = ModelSnapshot(physics.model.ptr) if snapshots_supported() else None
@@ -344,24 +390,30 @@ class Environment(dm_env.Environment):
         """Starts a new episode and returns its first TimeStep.
 
         Tries up to `max_reset_attempts` times while a hook raises
-        `EpisodeInitializationError`; the last such error propagates.
+        `EpisodeInitializationError`, logging each failed attempt as a warning; the last
+        such error propagates.
         """
         if self._fixed_random_state is not None:
             self._random_state.set_state(self._fixed_random_state)
         attempt = 1
         while True:
             try:
-                return self._reset_attempt()
+                timestep = self._reset_attempt()
             except EpisodeInitializationError as error:
                 if attempt >= self._max_reset_attempts:
                     raise
-                logging.error(
-                    "Episode initialization failed (attempt %d of %d): %r",
+                # The caller asked for retries, so a failed attempt is expected: a warning.
+                logging.warning(
+                    "Episode initialization failed (attempt %d of %d), retrying: %r",
                     attempt,
                     self._max_reset_attempts,
                     error,
                 )
                 attempt += 1
+            else:
+                # The task may have changed its control timestep since the last episode.
+                self._warn_if_time_limit_is_not_whole_steps()
+                return timestep
 
     def _reset_attempt(self) -> dm_env.TimeStep:
         # Hooks replaced on the task or an entity since the last episode take effect now.
@@ -385,6 +437,10 @@ class Environment(dm_env.Environment):
 
     def step(self, action) -> dm_env.TimeStep:
         """Applies `action` for one control step and returns the resulting TimeStep.
+
+        The action's bounds are not checked: as in dm_control, a value outside an
+        actuator's `ctrlrange` is written to `ctrl` unchanged, and MuJoCo clamps it to
+        the range when it computes the actuator's force.
 
         Raises:
           ValueError: if `action` does not match `action_spec()` in shape, cannot be

@@ -14,6 +14,7 @@ Pillow's gif writer merges consecutive identical frames into one longer frame.
 
 from __future__ import annotations
 
+import math
 import numbers
 import os
 import pathlib
@@ -75,6 +76,12 @@ def _positive_int(name: str, value) -> int:
     if isinstance(value, bool) or not isinstance(value, numbers.Integral) or value < 1:
         raise ValueError(f"{name}: expected an integer >= 1, got {value!r}")
     return int(value)
+
+
+def _has_no_time_limit(environment) -> bool:
+    """Whether `environment` says it has no time limit (one that does not say is assumed to)."""
+    time_limit = getattr(environment, "time_limit", None)
+    return isinstance(time_limit, numbers.Real) and math.isinf(time_limit)
 
 
 def video_extension(path: str | os.PathLike) -> str:
@@ -201,8 +208,9 @@ def record_video(
     Exactly one of `policy` and `actions` drives the episode. A `policy` is called with
     each TimeStep (the FIRST one included) and returns the next action; the episode runs
     until a LAST TimeStep or `max_steps` steps, so an environment without a time limit
-    needs `max_steps`. `actions` are applied in order until they run out, the episode
-    ends (the rest are not used; `steps` says how many were), or `max_steps`.
+    (`environment.time_limit` is inf) needs `max_steps`, or the recording might never end.
+    `actions` are applied in order until they run out, the episode ends (the rest are not
+    used; `steps` says how many were), or `max_steps`.
 
     The video has `steps + 1` frames (the reset frame, then one per step) at
     `fps_for(environment.control_timestep())` frames per second; see the module docstring.
@@ -224,8 +232,9 @@ def record_video(
 
     Raises:
       ValueError: naming the argument for an unknown extension, a non-positive or (mp4)
-        odd width or height, a non-positive `max_steps`, an unknown camera, or when
-        neither or both of `policy` and `actions` are given. Nothing is written then.
+        odd width or height, a non-positive `max_steps`, no `max_steps` for a policy on an
+        environment without a time limit, an unknown camera, or when neither or both of
+        `policy` and `actions` are given. Nothing is written then.
       ImportError: when imageio or imageio-ffmpeg is not installed.
     """
     video_extension(path)
@@ -244,6 +253,13 @@ def record_video(
         odd = "width" if width % 2 else "height"
         raise ValueError(
             f"{odd}: an mp4 needs an even frame size (H.264, yuv420p), got {width}x{height}"
+        )
+    if policy is not None and max_steps is None and _has_no_time_limit(environment):
+        raise ValueError(
+            "max_steps: expected a number of steps for a policy on an environment without a "
+            "time limit (time_limit=inf), got None: the recording would go on until the task "
+            "ends the episode, perhaps never; pass max_steps, or give the environment a "
+            "time_limit"
         )
     fps = fps_for(environment.control_timestep())
 

@@ -5,15 +5,22 @@ Contract of the adapter (`GymnasiumEnv`):
 - `observation_space` and `action_space` come from the wrapped environment's specs
   (see `composer.gym.spaces`): observations are the wrapped environment's own dict of
   arrays, unchanged, or with `flatten_observations` one `Box` of every feature.
+- `observation_space` follows the wrapped environment's observation spec at every
+  `reset`: observables enabled, disabled or reconfigured after wrapping (which a
+  `composer.Environment` applies at its next reset) change it there, never mid-episode.
 - `reset(seed=s)` reseeds the wrapped environment's `random_state` in place, so the same
   `s` gives the same episode; `reset()` without a seed continues the random sequence.
 - `step` returns `(observation, reward, terminated, truncated, info)`: an episode that
   ends with discount 0 (the task ended it) is *terminated*, one that ends with a
   non-zero discount (the time limit) is *truncated*; `info['discount']` is the discount.
+  The reward is checked against the wrapped environment's `reward_spec()`, which must
+  describe one number.
 - `render()` draws the `camera` with `mujoco`'s off-screen renderer: (height, width, 3)
   uint8 for 'rgb_array', (height, width) float32 metres for 'depth_array'.
 """
 
+import math
+from collections.abc import Callable, Mapping
 from typing import Any, ClassVar
 
 import dm_env
@@ -25,6 +32,50 @@ from composer.gym import spaces as spec_spaces
 __all__ = ["GymnasiumEnv"]
 
 _RENDER_MODES = ("rgb_array", "depth_array")
+
+
+def _spec_signature(spec) -> Any:
+    """What two observation specs must share to give the same space: names, kinds, specs."""
+    if isinstance(spec, Mapping):
+        return tuple((name, type(value), _spec_signature(value)) for name, value in spec.items())
+    return spec
+
+
+def _reward_converter(env: dm_env.Environment) -> Callable[[Any], float]:
+    """Returns the check that turns the rewards of `env` into floats, from its reward spec.
+
+    Raises:
+      ValueError: if the reward spec is not that of one number.
+    """
+    spec = env.reward_spec()
+    if not isinstance(spec, dm_env.specs.Array) or spec.shape != ():
+        raise ValueError(
+            f"{type(env).__name__}.reward_spec(): expected the spec of one number (Gymnasium's "
+            f"step returns one float reward), got {spec!r}"
+        )
+    bounded = isinstance(spec, dm_env.specs.BoundedArray)
+    low = float(spec.minimum) if bounded else -math.inf
+    high = float(spec.maximum) if bounded else math.inf
+    expected = "one number" if not bounded else f"one number in [{low:g}, {high:g}]"
+    said = f"as {type(env).__name__}.reward_spec() says ({spec!r})"
+
+    def to_float(reward) -> float:
+        if not isinstance(reward, float):
+            array = np.asarray(reward)
+            if array.shape != ():
+                raise ValueError(
+                    f"reward: expected {expected}, {said}, got {reward!r} of shape "
+                    f"{array.shape}; make the task's get_reward return a float"
+                )
+            try:
+                reward = float(array)
+            except (TypeError, ValueError):
+                raise ValueError(f"reward: expected {expected}, {said}, got {reward!r}") from None
+        if bounded and not low <= reward <= high:
+            raise ValueError(f"reward: expected {expected}, {said}, got {reward!r}")
+        return float(reward)
+
+    return to_float
 
 
 class GymnasiumEnv(gymnasium.Env):
@@ -43,11 +94,21 @@ class GymnasiumEnv(gymnasium.Env):
       flatten_observations: concatenate every feature observation, in the observation
         spec's order and each flattened in C order, into one `Box`. Camera images (uint8
         with at least 3 axes) stay separate: with any, observations are a dict of the
-        features (key 'features') and the images.
+        features (key 'features') and the images. For a `composer.Environment` the spec's
+        order is the task's observables first, then each entity's in the order of
+        `task.root_entity.iter_entities()` (the root first, then depth first), each
+        entity's in the order of its `observables.as_dict()` (declared ones by name).
+
+    Observable changes: `observation_space` is rebuilt at `reset` whenever the wrapped
+    environment's observation spec changed (an observable enabled, disabled or given
+    another buffer size since the last reset), so it always describes the observations
+    `reset` and `step` return. Gymnasium wrappers that read `env.observation_space` follow
+    it; vector environments (`ThreadedVectorEnv`, `RayVectorEnv`) fix their spaces when
+    built, so change observables before building one.
 
     Raises:
-      ValueError: for an unknown `render_mode`, or a render mode for an environment
-        without `physics`.
+      ValueError: for an unknown `render_mode`, a render mode for an environment
+        without `physics`, or a reward spec that is not that of one number.
       NotImplementedError: for `render_mode='human'`.
     """
 
@@ -87,14 +148,11 @@ class GymnasiumEnv(gymnasium.Env):
         self.metadata = dict(self.metadata)
         if hasattr(env, "control_timestep"):
             self.metadata["render_fps"] = 1.0 / env.control_timestep()
-        observation_spec = env.observation_spec()
-        if flatten_observations:
-            self._layout = spec_spaces.feature_layout(observation_spec)
-            self.observation_space = spec_spaces.flat_space(observation_spec, self._layout)
-        else:
-            self._layout = None
-            self.observation_space = spec_spaces.space_from_spec(observation_spec)
+        self._flatten = flatten_observations
+        self._observation_signature = None
+        self._follow_observation_spec()
         self.action_space = spec_spaces.box_from_spec(env.action_spec())
+        self._reward = _reward_converter(env)
         self._episode_over = True
 
     @property
@@ -126,6 +184,7 @@ class GymnasiumEnv(gymnasium.Env):
                 )
             random_state.seed(seed)
         timestep = self._env.reset()
+        self._follow_observation_spec()
         self._episode_over = False
         return self._observation(timestep.observation), {}
 
@@ -140,6 +199,8 @@ class GymnasiumEnv(gymnasium.Env):
         Raises:
           RuntimeError: if the episode is over (or never started) and `reset` was not
             called.
+          ValueError: naming the reward, if it does not match the wrapped environment's
+            `reward_spec()` (one number, within its bounds if it has any).
         """
         if self._episode_over:
             raise RuntimeError(
@@ -154,7 +215,7 @@ class GymnasiumEnv(gymnasium.Env):
             truncated = not terminated
         return (
             self._observation(timestep.observation),
-            float(timestep.reward),
+            self._reward(timestep.reward),
             terminated,
             truncated,
             {"discount": discount},
@@ -174,6 +235,20 @@ class GymnasiumEnv(gymnasium.Env):
     def close(self) -> None:
         """Closes the wrapped environment."""
         self._env.close()
+
+    def _follow_observation_spec(self) -> None:
+        """Rebuilds `observation_space` if the wrapped environment's observation spec changed."""
+        observation_spec = self._env.observation_spec()
+        signature = _spec_signature(observation_spec)
+        if signature == self._observation_signature:
+            return
+        self._observation_signature = signature
+        if self._flatten:
+            self._layout = spec_spaces.feature_layout(observation_spec)
+            self.observation_space = spec_spaces.flat_space(observation_spec, self._layout)
+        else:
+            self._layout = None
+            self.observation_space = spec_spaces.space_from_spec(observation_spec)
 
     def _observation(self, observation):
         layout = self._layout

@@ -23,6 +23,35 @@ def test_arena_compiles_with_its_name_and_a_2ms_timestep():
     assert physics.timestep() == 0.002
 
 
+class Stage(composer.Arena):
+    """The mistake a new user makes: an arena whose _build forgets super()._build()."""
+
+    def _build(self, name="stage"):
+        self.mjcf_model.worldbody.add("geom", type="plane", size=[1, 1, 0.1])
+
+
+def test_an_arena_whose_build_skips_super_build_names_the_mistake_and_the_fix():
+    with pytest.raises(AttributeError) as raised:
+        Stage()
+    assert str(raised.value) == (
+        "Stage has no MJCF model ('_mjcf_root'): Stage._build did not call super()._build(). "
+        "Start Stage._build with super()._build(name=...), which creates the arena's model "
+        "and its shared settings, then add to self.mjcf_model"
+    )
+
+
+def test_an_arena_subclass_of_a_broken_one_is_named_by_the_build_that_skips_super():
+    class Floored(Stage):
+        pass
+
+    with pytest.raises(
+        AttributeError,
+        match=r"^Floored has no MJCF model \('_mjcf_root'\): "
+        r"Stage\._build did not call super\(\)\._build\(\)\. ",
+    ):
+        Floored()
+
+
 def test_arena_model_is_named_base_by_default():
     assert composer.Arena().mjcf_model.model == "base"
 

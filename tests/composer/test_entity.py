@@ -40,6 +40,86 @@ def test_entity_without_build_cannot_be_instantiated():
         NoBuild()
 
 
+class InitPuck(composer.Entity):
+    """The mistake a new user makes: building in __init__ instead of _build."""
+
+    def __init__(self):
+        self._model = mjcf.RootElement(model="puck")
+        self._model.worldbody.add("geom", type="cylinder", size=[0.05, 0.02])
+
+    def _build(self):
+        pass
+
+    @property
+    def mjcf_model(self):
+        return self._model
+
+
+class RadiusPuck(composer.Entity):
+    """Overrides __init__ too, but calls the base, which runs _build."""
+
+    def __init__(self, radius):
+        self.radius = radius
+        super().__init__()
+
+    def _build(self):
+        self._model = mjcf.RootElement(model="puck")
+        self._model.worldbody.add("geom", type="cylinder", size=[self.radius, 0.02])
+
+    @property
+    def mjcf_model(self):
+        return self._model
+
+
+_INIT_PUCK_NOT_SET_UP = (
+    "InitPuck was never set up by composer.Entity.__init__ (it has no {name!r}): "
+    "InitPuck.__init__ replaces Entity.__init__ without calling it. Build the model in "
+    "_build(self, ...), which Entity.__init__ calls with the constructor's arguments, instead "
+    "of overriding __init__; or call super().__init__(...) in InitPuck.__init__"
+)
+
+
+def test_attaching_an_entity_whose_init_skips_the_base_names_the_mistake_and_the_fix():
+    arena = composer.Arena()
+    with pytest.raises(AttributeError) as raised:
+        arena.add_free_entity(InitPuck())
+    assert str(raised.value) == _INIT_PUCK_NOT_SET_UP.format(name="_parent")
+
+
+def test_observables_of_an_entity_whose_init_skips_the_base_name_the_mistake():
+    with pytest.raises(AttributeError) as raised:
+        InitPuck().observables  # noqa: B018
+    assert str(raised.value) == _INIT_PUCK_NOT_SET_UP.format(name="_observables")
+
+
+def test_an_init_override_that_calls_the_base_builds_and_attaches():
+    arena = composer.Arena()
+    puck = RadiusPuck(radius=0.07)
+    arena.add_free_entity(puck)
+    physics = mjcf.Physics.from_mjcf_model(arena.mjcf_model)
+    assert puck.parent is arena
+    assert physics.bind(puck.mjcf_model.find_all("geom")[0]).size[0] == pytest.approx(0.07)
+
+
+def test_reading_observables_inside_build_says_they_are_built_after_it():
+    class Early(composer.Entity):
+        def _build(self):
+            self._model = mjcf.RootElement(model="early")
+            self.observables.enable_all()
+
+        @property
+        def mjcf_model(self):
+            return self._model
+
+    with pytest.raises(AttributeError) as raised:
+        Early()
+    assert str(raised.value) == (
+        "Early.observables do not exist yet: Entity.__init__ builds them (with "
+        "_build_observables) after _build returns, so _build cannot use them; configure them "
+        "after construction, or pass observable_options to the constructor"
+    )
+
+
 def test_attach_returns_frame_and_sets_parent():
     arena, arm = Floor(), Arm()
     frame = arena.attach(arm)

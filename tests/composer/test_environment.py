@@ -1,8 +1,9 @@
 """composer.Environment: the dm_env loop, specs, time limits and action checking."""
 
 import copy
+import gc
 import pickle
-import weakref
+import warnings
 
 import dm_env
 import numpy as np
@@ -91,6 +92,8 @@ def test_step_before_first_reset_resets():
     assert env.step(np.zeros(2)).step_type == dm_env.StepType.FIRST
 
 
+# 0.09 s is four and a half 0.02 s steps: the fifth step ends the episode.
+@pytest.mark.filterwarnings("ignore:time_limit=0.09 s is not a multiple")
 def test_time_limit_ends_episode_with_the_tasks_discount():
     env = composer.Environment(ReachTask(discount=0.5), time_limit=0.09)
     env.reset()
@@ -109,6 +112,7 @@ def test_task_termination_ends_episode():
     assert env.step(np.zeros(2)).last()
 
 
+@pytest.mark.filterwarnings("ignore:time_limit=0.015 s is not a multiple")
 def test_step_after_last_starts_new_episode():
     env = composer.Environment(ReachTask(), time_limit=0.015)
     env.reset()
@@ -186,9 +190,66 @@ def test_environment_physics_refuses_elements_of_another_model():
         env.physics.bind(stray.joints)
 
 
-def test_physics_property_is_a_weak_proxy():
+def test_physics_property_reads_and_writes_through_to_the_physics():
     env = composer.Environment(ReachTask())
-    assert isinstance(env.physics, weakref.ProxyType)
+    env.reset()
+    physics = env.physics
+    assert physics is env.physics
+    assert isinstance(physics, mjcf.Physics)
+    physics.legacy_step = False
+    physics.bind(env.task.arm.joints).qpos = [0.3, -0.2]
+    assert env.step(np.zeros(2)).mid()
+    assert physics.data.time == pytest.approx(0.02)
+    assert env.physics.legacy_step is False
+
+
+class MarkedEveryEpisode(ReachTask):
+    """Adds a site before every episode: a structural change, so each reset makes a new
+    Physics."""
+
+    def initialize_episode_mjcf(self, random_state):
+        count = len(self.arena.mjcf_model.worldbody.get_children("site"))
+        self.arena.mjcf_model.worldbody.add("site", name=f"marker_{count}")
+
+
+def test_physics_of_a_garbage_collected_environment_says_to_keep_the_environment():
+    physics = composer.Environment(ReachTask()).physics
+    gc.collect()
+    with pytest.raises(ReferenceError) as raised:
+        physics.data.time  # noqa: B018
+    assert str(raised.value) == (
+        "env.physics was used after its composer.Environment was garbage-collected, which "
+        "freed the Physics: keep a reference to the environment for as long as you use its "
+        "physics (env = make_env() and then env.physics, not make_env().physics), or keep a "
+        "copy made with env.physics.copy()"
+    )
+
+
+def test_physics_after_close_says_it_was_closed():
+    env = composer.Environment(ReachTask())
+    physics = env.physics
+    env.close()
+    with pytest.raises(ReferenceError) as raised:
+        physics.bind(env.task.arm.joints)
+    assert str(raised.value) == (
+        "env.physics was used after env.close() freed the Physics: call env.reset() and "
+        "read env.physics again"
+    )
+
+
+def test_physics_replaced_at_a_reset_says_to_read_it_again():
+    env = composer.Environment(MarkedEveryEpisode())
+    env.reset()
+    physics = env.physics
+    env.reset()
+    with pytest.raises(ReferenceError) as raised:
+        physics.legacy_step = False
+    assert str(raised.value) == (
+        "env.physics was used after the environment replaced its Physics (at a reset that "
+        "recompiled a changed model structure, or the first reset after close()): read "
+        "env.physics again after each reset instead of keeping it"
+    )
+    assert env.physics.data.time == 0.0
 
 
 def test_task_and_random_state_properties():
@@ -272,6 +333,70 @@ def test_defaults_are_dm_controls():
     env.reset()
     for _ in range(200):
         assert env.step(np.zeros(2)).mid()
+
+
+def _every_40ms(time_limit):
+    """A ReachTask environment acting every 0.04 s with `time_limit`."""
+    task = ReachTask()
+    task.set_timesteps(control_timestep=0.04, physics_timestep=0.002)
+    return composer.Environment(task, time_limit=time_limit)
+
+
+def test_a_time_limit_between_two_steps_warns_naming_both_and_ends_at_the_later_step():
+    with pytest.warns(UserWarning) as record:
+        env = _every_40ms(0.05)
+    assert [str(warning.message) for warning in record] == [
+        "time_limit=0.05 s is not a multiple of the control timestep 0.04 s: an episode "
+        "ends at the first step that reaches it, after 2 steps at t=0.08 s; use a multiple "
+        "of the control timestep (0.04 s or 0.08 s) to end episodes at the time limit"
+    ]
+    assert record[0].filename == __file__
+    env.reset()
+    assert [env.step(np.zeros(2)).step_type for _ in range(2)] == [
+        dm_env.StepType.MID,
+        dm_env.StepType.LAST,
+    ]
+    assert env.physics.data.time == pytest.approx(0.08)
+
+
+def test_the_time_limit_warning_is_given_once_per_environment():
+    with pytest.warns(UserWarning):
+        env = _every_40ms(0.05)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        for _ in range(3):
+            env.reset()
+            env.step(np.zeros(2))
+            env.step(np.zeros(2))
+
+
+def test_a_time_limit_shorter_than_one_step_suggests_the_one_step_limit():
+    with pytest.warns(UserWarning) as record:
+        _every_40ms(0.01)
+    assert str(record[0].message) == (
+        "time_limit=0.01 s is not a multiple of the control timestep 0.04 s: an episode "
+        "ends at the first step that reaches it, after 1 step at t=0.04 s; use a multiple "
+        "of the control timestep (0.04 s) to end episodes at the time limit"
+    )
+
+
+def test_the_time_limit_is_checked_again_when_the_control_timestep_changes():
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        env = _every_40ms(0.08)
+        env.reset()
+    env.task.set_timesteps(control_timestep=0.06, physics_timestep=0.002)
+    with pytest.warns(UserWarning, match="not a multiple of the control timestep 0.06 s"):
+        env.reset()
+
+
+@pytest.mark.parametrize("time_limit", [0.08, 0.4, 0.0, float("inf")])
+def test_a_time_limit_of_whole_steps_or_none_gives_no_warning(time_limit):
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        env = _every_40ms(time_limit)
+        env.reset()
+    assert env.time_limit == time_limit
 
 
 def test_a_time_limit_of_zero_ends_the_episode_at_the_first_step():

@@ -218,17 +218,25 @@ def test_without_fixed_initial_state_episodes_start_differently():
     assert not np.array_equal(first, second)
 
 
-def test_reset_retries_after_episode_initialization_error(caplog):
+def test_reset_retries_after_episode_initialization_error_logging_warnings(caplog):
+    # Retries were asked for with max_reset_attempts, so a failed attempt is a warning,
+    # not an error.
     task = FailsToInitialize(failures=2)
     env = composer.Environment(task, max_reset_attempts=3)
-    with caplog.at_level(logging.ERROR):
+    with caplog.at_level(logging.INFO):
         assert env.reset().first()
     assert task.attempts == 3
-    assert [r.getMessage() for r in caplog.records if r.levelno == logging.ERROR] == [
-        "Episode initialization failed (attempt 1 of 3): "
-        "EpisodeInitializationError('attempt 1 failed')",
-        "Episode initialization failed (attempt 2 of 3): "
-        "EpisodeInitializationError('attempt 2 failed')",
+    assert [(r.levelno, r.getMessage()) for r in caplog.records] == [
+        (
+            logging.WARNING,
+            "Episode initialization failed (attempt 1 of 3), retrying: "
+            "EpisodeInitializationError('attempt 1 failed')",
+        ),
+        (
+            logging.WARNING,
+            "Episode initialization failed (attempt 2 of 3), retrying: "
+            "EpisodeInitializationError('attempt 2 failed')",
+        ),
     ]
 
 

@@ -156,6 +156,29 @@ def test_odd_mp4_size_is_rejected_but_allowed_for_gif(tmp_path):
     assert _read_frames(record.path).shape[1:3] == (49, 65)
 
 
+def test_a_policy_without_max_steps_or_time_limit_is_refused_before_anything_runs(tmp_path):
+    path = tmp_path / "endless.mp4"
+    environment = _environment()
+    with pytest.raises(ValueError) as raised:
+        video.record_video(environment, path, _swinging_policy)
+    assert str(raised.value) == (
+        "max_steps: expected a number of steps for a policy on an environment without a "
+        "time limit (time_limit=inf), got None: the recording would go on until the task "
+        "ends the episode, perhaps never; pass max_steps, or give the environment a "
+        "time_limit"
+    )
+    assert not path.exists()
+    # Nothing was reset or stepped: the first step starts the first episode.
+    assert environment.step(np.zeros(2)).first()
+
+
+def test_replayed_actions_need_no_max_steps_without_a_time_limit(tmp_path):
+    record = video.record_video(
+        _environment(), tmp_path / "replay.gif", actions=[np.zeros(2)] * 3, width=32, height=24
+    )
+    assert record.steps == 3
+
+
 def test_policy_and_actions_are_mutually_exclusive(tmp_path):
     with pytest.raises(ValueError, match="policy, actions: .*got neither"):
         video.record_video(_environment(), tmp_path / "x.mp4")

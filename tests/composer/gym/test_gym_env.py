@@ -6,6 +6,7 @@ import dm_env
 import gymnasium
 import numpy as np
 import pytest
+from dm_env import specs
 from gym_scene import SliderTask, slider_environment
 from gymnasium.utils.env_checker import check_env
 
@@ -82,6 +83,126 @@ def test_task_termination_with_discount_zero_is_terminated():
     assert [(r[2], r[3]) for r in results] == [(False, False), (True, False)]
     assert results[-1][1] == 1.0
     assert results[-1][4]["discount"] == 0.0
+
+
+class VectorRewardTask(SliderTask):
+    """Returns its reward as an array of shape (1,), which composer.Environment passes on."""
+
+    def get_reward(self, physics):
+        return np.array([0.5])
+
+
+class UnitRewardTask(SliderTask):
+    """Declares rewards in [0, 1], but returns 1.5."""
+
+    def get_reward_spec(self):
+        return specs.BoundedArray((), np.float64, minimum=0.0, maximum=1.0, name="reward")
+
+    def get_reward(self, physics):
+        return 1.5
+
+
+class TwoRewardsTask(SliderTask):
+    def get_reward_spec(self):
+        return specs.Array((2,), np.float64, name="reward")
+
+
+def test_a_reward_of_shape_one_is_refused_naming_the_reward_and_its_spec():
+    env = GymnasiumEnv(composer.Environment(VectorRewardTask()))
+    env.reset(seed=0)
+    with pytest.raises(ValueError) as raised:
+        env.step(np.zeros(1))
+    assert str(raised.value) == (
+        "reward: expected one number, as Environment.reward_spec() says "
+        "(Array(shape=(), dtype=dtype('float64'), name='reward')), got array([0.5]) of shape "
+        "(1,); make the task's get_reward return a float"
+    )
+
+
+def test_a_reward_outside_the_bounds_of_its_spec_is_refused():
+    env = GymnasiumEnv(composer.Environment(UnitRewardTask()))
+    env.reset(seed=0)
+    with pytest.raises(ValueError) as raised:
+        env.step(np.zeros(1))
+    assert str(raised.value) == (
+        "reward: expected one number in [0, 1], as Environment.reward_spec() says "
+        "(BoundedArray(shape=(), dtype=dtype('float64'), name='reward', minimum=0.0, "
+        "maximum=1.0)), got 1.5"
+    )
+
+
+def test_a_reward_spec_of_more_than_one_number_is_refused_at_construction():
+    with pytest.raises(ValueError) as raised:
+        GymnasiumEnv(composer.Environment(TwoRewardsTask()))
+    assert str(raised.value) == (
+        "Environment.reward_spec(): expected the spec of one number (Gymnasium's step "
+        "returns one float reward), got Array(shape=(2,), dtype=dtype('float64'), "
+        "name='reward')"
+    )
+
+
+def test_a_reward_within_its_bounded_spec_is_returned_as_a_float():
+    class HalfRewardTask(UnitRewardTask):
+        def get_reward(self, physics):
+            return np.float32(0.5)
+
+    env = GymnasiumEnv(composer.Environment(HalfRewardTask()))
+    env.reset(seed=0)
+    reward = env.step(np.zeros(1))[1]
+    assert type(reward) is float and reward == 0.5
+
+
+@pytest.mark.parametrize("flatten", [False, True])
+def test_observation_space_follows_an_observable_disabled_after_wrapping(flatten):
+    env = GymnasiumEnv(slider_environment(), flatten_observations=flatten)
+    env.reset(seed=0)
+    env.dm_env.task.task_observables["velocity"].enabled = False
+    observation, _ = env.reset(seed=0)
+    if flatten:
+        assert observation.shape == env.observation_space.shape == (1,)
+    else:
+        assert list(observation) == list(env.observation_space.spaces) == ["position"]
+    assert env.observation_space.contains(observation)
+    assert env.observation_space.contains(env.step(np.zeros(1))[0])
+
+
+def test_observation_space_follows_a_buffer_size_changed_after_wrapping():
+    env = GymnasiumEnv(slider_environment())
+    env.dm_env.task.task_observables["position"].buffer_size = 3
+    assert env.observation_space["position"].shape == (1, 1)
+    observation, _ = env.reset(seed=0)
+    assert observation["position"].shape == env.observation_space["position"].shape == (3, 1)
+    assert env.observation_space.contains(observation)
+
+
+def test_observation_space_changes_at_reset_not_in_the_middle_of_an_episode():
+    env = GymnasiumEnv(slider_environment())
+    env.reset(seed=0)
+    space = env.observation_space
+    env.dm_env.task.task_observables["velocity"].enabled = False
+    observation = env.step(np.zeros(1))[0]
+    assert env.observation_space is space
+    assert space.contains(observation)
+
+
+def test_observation_space_is_kept_when_reset_changes_no_observable():
+    env = GymnasiumEnv(slider_environment())
+    space = env.observation_space
+    env.reset(seed=0)
+    env.reset(seed=1)
+    assert env.observation_space is space
+
+
+def test_env_checker_passes_after_an_observable_is_disabled():
+    env = GymnasiumEnv(slider_environment(time_limit=0.2), flatten_observations=True)
+    env.dm_env.task.task_observables["velocity"].enabled = False
+    env.reset(seed=0)
+    with warnings.catch_warnings():
+        # An observation outside its space is a warning too: make it an error. The advice
+        # about the unbounded Box is not one.
+        warnings.simplefilter("error")
+        warnings.filterwarnings("ignore", message=".*value is -?infinity")
+        check_env(env, skip_render_check=True)
 
 
 def test_step_after_the_episode_ended_asks_for_reset():
