@@ -17,7 +17,7 @@ from manipulation.tasks import task_constants as tc
 from manipulation.tasks.lift import Lift
 from manipulation.tasks.reach import Reach
 
-__all__ = ["BATCHED", "BatchLift", "BatchReach", "load"]
+__all__ = ["BATCHED", "BatchLift", "BatchReach", "load", "make_vector_env"]
 
 
 class BatchReach(batch.BatchTask):
@@ -110,7 +110,8 @@ def load(environment_name: str, num_envs: int, *, seed=None, **kwargs) -> batch.
       environment_name: one of `BATCHED` ('reach_site_features', 'lift_brick_features').
       num_envs: the number of worlds.
       seed: an int, a `np.random.RandomState` or None; seeds each world's generator.
-      **kwargs: passed to `composer.batch.BatchEnvironment` (`device`, `random_states`, ...).
+      **kwargs: passed to `composer.batch.BatchEnvironment` (`device`, `random_states`,
+        `time_limit`: the CPU task's 10 s unless given, ...).
 
     Raises:
       ValueError: if the name is not one of `BATCHED`.
@@ -121,6 +122,27 @@ def load(environment_name: str, num_envs: int, *, seed=None, **kwargs) -> batch.
             f"{environment_name!r}"
         )
     task = registry.build_task(environment_name)
-    return batch.BatchEnvironment(
-        task, num_envs, time_limit=tc.TIME_LIMIT, random_state=seed, **kwargs
-    )
+    kwargs.setdefault("time_limit", tc.TIME_LIMIT)
+    return batch.BatchEnvironment(task, num_envs, random_state=seed, **kwargs)
+
+
+def make_vector_env(
+    environment_name: str, num_envs: int, device: str | None, autoreset_mode, **kwargs
+):
+    """`load(...)` as a `composer.batch.gym.WarpVectorEnv` (`gymnasium.make_vec`'s backend
+    'warp'); imports gymnasium.
+
+    Raises:
+      ValueError: for an autoreset mode other than NEXT_STEP.
+    """
+    from gymnasium.vector import AutoresetMode
+
+    from composer.batch.gym import WarpVectorEnv
+
+    if AutoresetMode(autoreset_mode) is not AutoresetMode.NEXT_STEP:
+        raise ValueError(
+            f"autoreset_mode: backend 'warp' resets worlds at the next step (NEXT_STEP), got "
+            f"{autoreset_mode!r}"
+        )
+    env = load(environment_name, num_envs, device="cpu" if device is None else device, **kwargs)
+    return WarpVectorEnv(env)

@@ -189,6 +189,10 @@ class BatchEnvironment:
         """Each world's random generator."""
         return self._random_states
 
+    def reseed(self, seed: int | np.random.RandomState | None) -> None:
+        """Reseeds every world's random generator from `seed`, as the constructor does."""
+        self._random_states = _random_states(self.num_envs, seed, None)
+
     def action_spec(self) -> specs.BoundedArray:
         """One world's action spec (the CPU task's); actions have a leading num_envs axis."""
         return self._action_spec
