@@ -20,8 +20,8 @@ def load() -> tuple[ModuleType, ModuleType]:
     """Returns `(warp, mujoco_warp)`, imported and initialised once.
 
     Returns:
-      The `warp` module (quiet, its kernel cache in `$COMPOSER_WARP_KERNEL_CACHE` when that is
-      set) and the `mujoco_warp` module.
+      The `warp` module (logging warnings only, its kernel cache in
+      `$COMPOSER_WARP_KERNEL_CACHE` when that is set) and the `mujoco_warp` module.
 
     Raises:
       ImportError: when `mujoco_warp` or `warp` is not installed; the message says how to
@@ -34,7 +34,8 @@ def load() -> tuple[ModuleType, ModuleType]:
             import warp
         except ImportError as error:
             raise ImportError(f"{_INSTALL_HINT} ({error})") from error
-        warp.config.quiet = True
+        # Warp logs its start-up banner and every kernel module it loads at INFO.
+        warp.config.log_level = warp.LOG_WARNING
         cache = os.environ.get(KERNEL_CACHE_ENV)
         if cache:
             warp.config.kernel_cache_dir = os.path.abspath(cache)
