@@ -23,13 +23,17 @@ Usage: python benchmarks/batch_env.py [--device cpu|cuda:0] [--num-envs 1,64,102
 import argparse
 import os
 import pathlib
+import sys
 import threading
 import time
 
 import mujoco
 import numpy as np
 
-_REPOSITORY = pathlib.Path(__file__).resolve().parents[1]
+_HERE = pathlib.Path(__file__).resolve().parent
+_REPOSITORY = _HERE.parent
+# This folder holds manipulation.py (a benchmark), which would shadow the package.
+sys.path = [entry for entry in sys.path if pathlib.Path(entry or ".").resolve() != _HERE]
 os.environ.setdefault("COMPOSER_WARP_KERNEL_CACHE", str(_REPOSITORY / ".cache" / "warp"))
 
 import gymnasium  # noqa: E402
