@@ -24,6 +24,7 @@ import numpy as np
 import pytest
 
 import composer
+import mjcf
 from composer.batch import BatchEnvironment
 from manipulation import batch as manipulation_batch
 from manipulation.tasks import observation_settings, registry
@@ -157,3 +158,25 @@ def test_each_world_ends_and_restarts_its_episode_on_its_own():
     assert [row[0] for row in step_types] == [mid, last, first, mid, last, first, mid, last]
     assert [row[1] for row in step_types] == [mid, mid, last, first, mid, mid, last, first]
     assert [row[3] for row in step_types] == [mid] * 8
+
+
+def test_lift_reward_matches_the_cpu_task_when_the_hand_holds_the_brick_up():
+    cpu = composer.Environment(registry.build_task("lift_brick_features"), random_state=0)
+    cpu.reset()
+    task, physics = cpu.task, cpu.physics
+    joint = mjcf.get_frame_freejoint(task.prop.mjcf_model)
+    pinch = physics.bind(task.hand.tool_center_point).xpos.copy()
+    rest = physics.bind(joint).qpos.copy()
+    states, expected = [], []
+    # In the fingers above the table, high above the table out of reach, on the table.
+    for position in (pinch + [0.0, 0.0, 0.03], pinch + [0.3, 0.0, 0.0], rest[:3]):
+        physics.bind(joint).qpos[:3] = position
+        physics.forward()
+        states.append(physics.data.qpos.copy())
+        expected.append(task.get_reward(physics))
+    assert expected == [1.0, 0.0, 0.0]
+    batch_env = manipulation_batch.load("lift_brick_features", len(states), seed=0)
+    batch_env.reset()
+    batch_env.physics.data.qpos[...] = np.array(states)
+    batch_env.physics.forward()
+    np.testing.assert_array_equal(batch_env.task.get_reward(batch_env.physics), expected)
