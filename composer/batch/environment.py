@@ -116,7 +116,8 @@ class BatchEnvironment:
       TypeError: for a task with no batched version, or an observable without a batched
         reader.
       NotImplementedError: for a task or entity with `initialize_episode_mjcf` hooks (MJCF
-        variations need a recompile per episode).
+        variations need a recompile per episode), with sub-step or `after_step` hooks, or
+        with a `before_step` that the `BatchTask` does not override.
     """
 
     def __init__(
@@ -145,6 +146,7 @@ class BatchEnvironment:
         cpu_task = self._batch_task.task
         hooks = EnvironmentHooks(cpu_task)
         _refuse_mjcf_variations(cpu_task)
+        _refuse_unbatched_hooks(hooks, self._batch_task)
         self._n_sub_steps = (
             cpu_task.physics_steps_per_control_step
             if n_sub_steps is None
@@ -280,6 +282,34 @@ class BatchEnvironment:
         discount[restarting] = 1.0
         self._reset_next = ended
         return BatchTimeStep(step_type, reward, discount, self._observables.read())
+
+
+def _hook_owners(task: composer.Task, names: tuple[str, ...]) -> list[str]:
+    """'Owner.hook' for each of `names` that the task or an entity overrides."""
+    found = []
+    for owner in (task, *task.root_entity.iter_entities()):
+        base = composer.Task if isinstance(owner, composer.Task) else composer.Entity
+        for name in names:
+            if getattr(type(owner), name) is not getattr(base, name):
+                found.append(f"{type(owner).__name__}.{name}")
+    return found
+
+
+def _refuse_unbatched_hooks(hooks: EnvironmentHooks, batch_task: BatchTask) -> None:
+    """Raises NotImplementedError for CPU hooks that a batch would otherwise skip."""
+    task = batch_task.task
+    if hooks.has_substep_hooks or hooks.has_after_step_hooks:
+        owners = _hook_owners(task, ("before_substep", "after_substep", "after_step"))
+        raise NotImplementedError(
+            f"{', '.join(owners)}: a batch steps its sub-steps on the device, without Python "
+            "hooks between them (before_substep, after_substep and after_step are not run)"
+        )
+    if hooks.has_before_step_hooks and type(batch_task).before_step is BatchTask.before_step:
+        owners = _hook_owners(task, ("before_step",))
+        raise NotImplementedError(
+            f"{', '.join(owners)} does more than set the controls; "
+            f"{type(batch_task).__name__} must override before_step to do it for every world"
+        )
 
 
 def _refuse_mjcf_variations(task: composer.Task) -> None:

@@ -104,3 +104,26 @@ def test_mjcf_variation_is_refused_because_it_needs_a_recompile():
         NotImplementedError, match=r"_VariedReach.initialize_episode_mjcf.*recompile"
     ):
         BatchEnvironment(_VariedReach(observation_settings.FEATURES), 2)
+
+
+class _SubstepReach(Reach):
+    def after_substep(self, physics, random_state) -> None:
+        physics.data.qfrc_applied[0] = 0.0
+
+
+def test_substep_hooks_are_refused_because_no_python_runs_between_substeps():
+    with pytest.raises(NotImplementedError, match=r"_SubstepReach.after_substep: a batch steps"):
+        BatchEnvironment(_SubstepReach(observation_settings.FEATURES), 2)
+
+
+class _PushingReach(Reach):
+    def before_step(self, physics, action, random_state) -> None:
+        super().before_step(physics, action, random_state)
+        physics.data.qfrc_applied[0] = 1.0
+
+
+def test_a_cpu_before_step_needs_a_batched_one():
+    with pytest.raises(
+        NotImplementedError, match=r"_PushingReach.before_step does more.*BatchReach"
+    ):
+        BatchEnvironment(_PushingReach(observation_settings.FEATURES), 2)
