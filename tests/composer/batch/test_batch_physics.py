@@ -127,3 +127,10 @@ def test_a_cpu_before_step_needs_a_batched_one():
         NotImplementedError, match=r"_PushingReach.before_step does more.*BatchReach"
     ):
         BatchEnvironment(_PushingReach(observation_settings.FEATURES), 2)
+
+
+def test_an_observable_with_a_corruptor_is_refused_by_key():
+    task = Reach(observation_settings.FEATURES)
+    task.hand.observables.pinch_site_pos.corruptor = lambda value, random_state: value
+    with pytest.raises(ValueError, match=r"'jaco_arm/jaco_hand/pinch_site_pos': option corruptor"):
+        BatchEnvironment(task, 2)
