@@ -8,9 +8,11 @@ manipulation for an id written `manipulation:composer/<name>-v0`.
 
 `gymnasium.make(id, **kwargs)` builds `make_env(name, **kwargs)`;
 `gymnasium.make_vec(id, num_envs=n, vectorization_mode='vector_entry_point', **kwargs)`
-builds `make_vector_env(name, n, **kwargs)`: a `composer.gym.ThreadedVectorEnv`, or with
-`backend='ray'` a `composer.gym.RayVectorEnv`. (Gymnasium 1.x refuses `vector_kwargs` in
-this mode; the vector env's options go in `kwargs` with the sub-environments' ones.)
+builds `make_vector_env(name, n, **kwargs)`: a `composer.gym.ThreadedVectorEnv`, with
+`backend='ray'` a `composer.gym.RayVectorEnv`, or with `backend='warp'` (and `device`) a
+`composer.batch.gym.WarpVectorEnv` (the tasks of `manipulation.batch.BATCHED`, extra
+`[warp]`). (Gymnasium 1.x refuses `vector_kwargs` in this mode; the vector env's options go
+in `kwargs` with the sub-environments' ones.)
 """
 
 import functools
@@ -22,6 +24,7 @@ from gymnasium.vector import AutoresetMode
 import manipulation
 
 if TYPE_CHECKING:
+    from composer.batch.gym import WarpVectorEnv
     from composer.gym import GymnasiumEnv, RayVectorEnv, ThreadedVectorEnv
 
 __all__ = ["NAMESPACE", "env_id", "make_env", "make_vector_env", "register_all"]
@@ -61,20 +64,33 @@ def make_vector_env(
     max_restarts: int | None = None,
     autoreset_mode: AutoresetMode | str = AutoresetMode.NEXT_STEP,
     copy: bool = True,
+    device: str | None = None,
     **kwargs,
-) -> "ThreadedVectorEnv | RayVectorEnv":
+) -> "ThreadedVectorEnv | RayVectorEnv | WarpVectorEnv":
     """Returns a vector env of `num_envs` copies of `make_env(environment_name)`.
 
     Args:
       backend: "threads" for a `ThreadedVectorEnv` (takes `num_threads`), "ray" for a
         `RayVectorEnv` (takes `address`, `envs_per_actor`, `num_cpus_per_actor`,
         `max_restarts`, defaults as there; needs the extra `[ray]`).
+        "warp" for a `WarpVectorEnv`: all worlds on one MuJoCo Warp `device` ("cpu" by
+        default, or "cuda:0"); kwargs go to `composer.batch.BatchEnvironment`.
       autoreset_mode, copy: passed to either.
       **kwargs: passed to each sub-environment's `GymnasiumEnv`.
 
     Raises:
       ValueError: for an unknown backend, or an option the backend does not take.
     """
+    if backend == "warp":
+        from manipulation import batch
+
+        others = dict(num_threads=num_threads, address=address, envs_per_actor=envs_per_actor)
+        given = [name for name, value in others.items() if value is not None]
+        if given or num_cpus_per_actor is not None or max_restarts is not None:
+            raise ValueError(f"{(given or ['a Ray option'])[0]}: not an option of backend='warp'")
+        return batch.make_vector_env(environment_name, num_envs, device, autoreset_mode, **kwargs)
+    if device is not None:
+        raise ValueError(f"device: an option of backend='warp', but backend is {backend!r}")
     from composer.gym import RayVectorEnv, ThreadedVectorEnv
 
     env_fn = functools.partial(make_env, environment_name, **kwargs)
@@ -104,7 +120,7 @@ def make_vector_env(
             autoreset_mode=autoreset_mode,
             copy=copy,
         )
-    raise ValueError(f"backend: expected 'threads' or 'ray', got {backend!r}")
+    raise ValueError(f"backend: expected 'threads', 'ray' or 'warp', got {backend!r}")
 
 
 def register_all() -> None:

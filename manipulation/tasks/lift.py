@@ -48,6 +48,11 @@ class Lift(base.ManipulationTask):
     def prop(self) -> Prop:
         return self._prop
 
+    @property
+    def lift_height(self) -> float:
+        """The height (m) of the prop's lowest corner that earns the full reward."""
+        return self._lift_height
+
     def after_compile(self, physics, random_state) -> None:
         super().after_compile(physics, random_state)
         # The heights of the prop's corners in the flattened site_xpos.

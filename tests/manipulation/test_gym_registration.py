@@ -68,7 +68,7 @@ def test_make_vec_passes_thread_count_and_autoreset_mode():
 
 
 def test_make_vec_rejects_an_unknown_backend():
-    with pytest.raises(ValueError, match="backend: expected 'threads' or 'ray', got 'mpi'"):
+    with pytest.raises(ValueError, match="backend: expected 'threads', 'ray' or 'warp', got 'mpi'"):
         gymnasium.make_vec(
             "composer/reach_site_features-v0",
             num_envs=2,

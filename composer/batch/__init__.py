@@ -1,0 +1,22 @@
+"""Batched composer environments on MuJoCo Warp: thousands of worlds of one task at once.
+
+Needs the extra `[warp]` (`mujoco-warp`, `warp-lang`); importing this package does not
+import Warp, building a `BatchEnvironment` does. See docs/batch.md for the limits.
+"""
+
+from composer.batch.environment import BatchEnvironment, BatchTimeStep
+from composer.batch.observables import BatchObservables, batch_reader
+from composer.batch.physics import BatchBinding, BatchPhysics
+from composer.batch.task import BatchTask, for_task, register
+
+__all__ = [
+    "BatchBinding",
+    "BatchEnvironment",
+    "BatchObservables",
+    "BatchPhysics",
+    "BatchTask",
+    "BatchTimeStep",
+    "batch_reader",
+    "for_task",
+    "register",
+]

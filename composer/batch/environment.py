@@ -1,0 +1,326 @@
+"""BatchEnvironment: `num_envs` copies of a composer task stepped together on MuJoCo Warp."""
+
+import math
+import numbers
+from collections.abc import Sequence
+from typing import NamedTuple
+
+import dm_env
+import numpy as np
+from dm_env import specs
+
+import composer
+import mjcf
+from composer.batch.observables import BatchObservables
+from composer.batch.physics import BatchPhysics
+from composer.batch.task import BatchTask, for_task
+from composer.hooks import EnvironmentHooks
+
+__all__ = ["BatchEnvironment", "BatchTimeStep"]
+
+_FIRST, _MID, _LAST = (
+    int(t) for t in (dm_env.StepType.FIRST, dm_env.StepType.MID, dm_env.StepType.LAST)
+)
+
+
+class BatchTimeStep(NamedTuple):
+    """What `BatchEnvironment.reset` and `step` return, one row per world.
+
+    Attributes:
+      step_type: int8 (num_envs,), `dm_env.StepType` values: FIRST for a world whose
+        episode starts, MID, or LAST for one whose episode ended at this step.
+      reward: float (num_envs,); 0 for a FIRST world.
+      discount: float (num_envs,); 1 for a FIRST world.
+      observation: dict of arrays (num_envs, *the CPU environment's observation shape).
+    """
+
+    step_type: np.ndarray
+    reward: np.ndarray
+    discount: np.ndarray
+    observation: dict[str, np.ndarray]
+
+    def first(self) -> np.ndarray:
+        return self.step_type == _FIRST
+
+    def mid(self) -> np.ndarray:
+        return self.step_type == _MID
+
+    def last(self) -> np.ndarray:
+        return self.step_type == _LAST
+
+
+def _check_positive_int(**kwargs) -> int:
+    ((name, value),) = kwargs.items()
+    if isinstance(value, numbers.Integral) and not isinstance(value, bool) and value >= 1:
+        return int(value)
+    raise ValueError(f"{name}: expected an int >= 1, got {value!r}")
+
+
+def _random_states(num_envs: int, random_state, random_states) -> list[np.random.RandomState]:
+    if random_states is not None:
+        if len(random_states) != num_envs:
+            raise ValueError(
+                f"random_states: expected {num_envs} (one per world), got {len(random_states)}"
+            )
+        return [
+            rs if isinstance(rs, np.random.RandomState) else np.random.RandomState(rs)
+            for rs in random_states
+        ]
+    if not isinstance(random_state, np.random.RandomState):
+        random_state = np.random.RandomState(random_state)
+    seeds = random_state.randint(2**31, size=num_envs)
+    return [np.random.RandomState(seed) for seed in seeds]
+
+
+def _control_step_limit(time_limit: float, physics_timestep: float, n_sub_steps: int) -> float:
+    """The number of control steps after which C MuJoCo's float64 `time` reaches the limit.
+
+    The time is accumulated as MuJoCo does (one addition per physics step), so a world
+    ends at the same step as the CPU environment, whatever float32's `time` on the device.
+    """
+    if math.isinf(time_limit):
+        return math.inf
+    time, steps = 0.0, 0
+    while time < time_limit:
+        for _ in range(n_sub_steps):
+            time += physics_timestep
+        steps += 1
+    return steps
+
+
+class BatchEnvironment:
+    """Runs `num_envs` worlds of a composer task on a MuJoCo Warp device, as one batch.
+
+    The task's MJCF is compiled once through `mjcf` (the host `mjcf.Physics`, on which the
+    `after_compile` hooks run once), then put on `device` with `num_envs` worlds. Each world
+    is an episode of its own, with its own random generator, step count and time limit;
+    a world whose episode ended is reset on its own at the next `step`, as
+    `composer.Environment` does (the batch's action for it is ignored).
+
+    Args:
+      task: a `composer.Task` with a registered batched version, or a `BatchTask`.
+      num_envs: the number of worlds.
+      device: the Warp device: "cpu" or "cuda:0" (CUDA graph capture of the physics step).
+      time_limit: seconds of simulated time after which a world's episode ends (LAST).
+      random_state: an int seed or `np.random.RandomState` from which each world's random
+        generator is seeded (ignored when `random_states` is given).
+      random_states: one int seed or `np.random.RandomState` per world.
+      n_sub_steps: physics steps per control step (default: the task's).
+      strip_singleton_obs_buffer_dim: as in `composer.Environment`.
+      batched_model_fields: MjModel fields to give one row per world, in addition to the
+        task's own (see `BatchPhysics`).
+      nconmax, njmax: per-world contact and constraint capacity for MuJoCo Warp.
+
+    Raises:
+      ValueError: for a bad argument, named in the message.
+      TypeError: for a task with no batched version, or an observable without a batched
+        reader.
+      NotImplementedError: for a task or entity with `initialize_episode_mjcf` hooks (MJCF
+        variations need a recompile per episode), with sub-step or `after_step` hooks, or
+        with a `before_step` that the `BatchTask` does not override.
+    """
+
+    def __init__(
+        self,
+        task: composer.Task | BatchTask,
+        num_envs: int,
+        *,
+        device: str = "cpu",
+        time_limit: float = float("inf"),
+        random_state: int | np.random.RandomState | None = None,
+        random_states: Sequence[int | np.random.RandomState] | None = None,
+        n_sub_steps: int | None = None,
+        strip_singleton_obs_buffer_dim: bool = False,
+        batched_model_fields: Sequence[str] = (),
+        nconmax: int | None = None,
+        njmax: int | None = None,
+    ):
+        self.num_envs = _check_positive_int(num_envs=num_envs)
+        if not isinstance(device, str):
+            raise ValueError(
+                f"device: expected a Warp device name such as 'cpu' or 'cuda:0', got {device!r}"
+            )
+        if not isinstance(time_limit, numbers.Real) or math.isnan(time_limit) or time_limit < 0:
+            raise ValueError(f"time_limit: expected a number of seconds >= 0, got {time_limit!r}")
+        self._batch_task = for_task(task)
+        cpu_task = self._batch_task.task
+        hooks = EnvironmentHooks(cpu_task)
+        _refuse_mjcf_variations(cpu_task)
+        _refuse_unbatched_hooks(hooks, self._batch_task)
+        self._n_sub_steps = (
+            cpu_task.physics_steps_per_control_step
+            if n_sub_steps is None
+            else _check_positive_int(n_sub_steps=n_sub_steps)
+        )
+        self._random_states = _random_states(self.num_envs, random_state, random_states)
+        host = mjcf.Physics.from_mjcf_model(cpu_task.root_entity.mjcf_model)
+        with host.reset_context():
+            hooks.after_compile(host, np.random.RandomState(0))
+        fields = tuple(self._batch_task.batched_model_fields) + tuple(batched_model_fields)
+        self._physics = BatchPhysics(
+            host,
+            self.num_envs,
+            device=device,
+            batched_model_fields=fields,
+            nconmax=nconmax,
+            njmax=njmax,
+        )
+        self._batch_task.after_compile(self._physics)
+        self._action_spec = cpu_task.action_spec(host)
+        self._observables = BatchObservables(
+            cpu_task.observables, self._physics, strip_singleton_obs_buffer_dim
+        )
+        self._step_limit = _control_step_limit(
+            float(time_limit), cpu_task.physics_timestep, self._n_sub_steps
+        )
+        self._steps = np.zeros(self.num_envs, dtype=np.int64)
+        self._reset_next = np.ones(self.num_envs, dtype=bool)
+
+    @property
+    def physics(self) -> BatchPhysics:
+        """The `BatchPhysics` of all worlds."""
+        return self._physics
+
+    @property
+    def task(self) -> BatchTask:
+        """The `BatchTask`; its `task` is the CPU task."""
+        return self._batch_task
+
+    @property
+    def random_states(self) -> list[np.random.RandomState]:
+        """Each world's random generator."""
+        return self._random_states
+
+    def reseed(self, seed: int | np.random.RandomState | None) -> None:
+        """Reseeds every world's random generator from `seed`, as the constructor does."""
+        self._random_states = _random_states(self.num_envs, seed, None)
+
+    def action_spec(self) -> specs.BoundedArray:
+        """One world's action spec (the CPU task's); actions have a leading num_envs axis."""
+        return self._action_spec
+
+    def observation_spec(self) -> dict[str, specs.Array]:
+        """One world's observation specs by key (float32, the shapes of one world)."""
+        return {
+            name: specs.Array(value.shape[1:], value.dtype, name)
+            for name, value in self._observables.read().items()
+        }
+
+    def _reset_worlds(self, env_ids: np.ndarray) -> None:
+        states = [self._random_states[i] for i in env_ids]
+        self._batch_task.initialize_episode(self._physics, env_ids, states)
+        self._physics.forward(env_ids, actuation=False)
+        self._steps[env_ids] = 0
+        self._reset_next[env_ids] = False
+
+    def reset(self) -> BatchTimeStep:
+        """Starts a new episode in every world.
+
+        Returns:
+          A `BatchTimeStep` with every step type FIRST, rewards 0 and discounts 1.
+        """
+        self._reset_worlds(np.arange(self.num_envs))
+        n = self.num_envs
+        return BatchTimeStep(
+            np.full(n, _FIRST, np.int8), np.zeros(n), np.ones(n), self._observables.read()
+        )
+
+    def _check_action(self, action) -> np.ndarray:
+        expected = (self.num_envs,) + tuple(self._action_spec.shape)
+        try:
+            array = np.asarray(action, dtype=np.float64)
+        except (TypeError, ValueError) as error:
+            raise ValueError(
+                f"action: expected a float array of shape {expected}, got {action!r}"
+            ) from error
+        if array.shape != expected:
+            raise ValueError(
+                f"action: expected shape {expected} (num_envs, *action_spec().shape), "
+                f"got {array.shape}"
+            )
+        if not np.isfinite(array).all():
+            worlds = np.unique(np.nonzero(~np.isfinite(array))[0])
+            raise ValueError(f"action: NaN or infinity in the actions of worlds {worlds.tolist()}")
+        return array
+
+    def step(self, action) -> BatchTimeStep:
+        """Steps every world by one control step; worlds after LAST start a new episode.
+
+        Args:
+          action: shape (num_envs, *action_spec().shape).
+
+        Returns:
+          A `BatchTimeStep`: FIRST (reward 0, discount 1) for worlds that were reset, LAST
+          for worlds whose episode ended (the task terminated it or the time limit passed),
+          MID for the others.
+
+        Raises:
+          ValueError: for an action of the wrong shape or with NaN or infinity; nothing is
+            stepped.
+        """
+        action = self._check_action(action)
+        if self._reset_next.all():
+            return self.reset()
+        restarting = np.flatnonzero(self._reset_next)
+        physics, task = self._physics, self._batch_task
+        task.before_step(physics, action)
+        physics.step(self._n_sub_steps)
+        if restarting.size:
+            # These worlds were stepped with the others; their reset overwrites that step.
+            self._reset_worlds(restarting)
+        self._steps += 1
+        self._steps[restarting] = 0
+        reward = np.asarray(task.get_reward(physics), dtype=np.float64)
+        discount = np.asarray(task.get_discount(physics), dtype=np.float64)
+        ended = np.asarray(task.should_terminate_episode(physics), dtype=bool) | (
+            self._steps >= self._step_limit
+        )
+        ended[restarting] = False
+        step_type = np.where(ended, _LAST, _MID).astype(np.int8)
+        step_type[restarting] = _FIRST
+        reward[restarting] = 0.0
+        discount[restarting] = 1.0
+        self._reset_next = ended
+        return BatchTimeStep(step_type, reward, discount, self._observables.read())
+
+
+def _hook_owners(task: composer.Task, names: tuple[str, ...]) -> list[str]:
+    """'Owner.hook' for each of `names` that the task or an entity overrides."""
+    found = []
+    for owner in (task, *task.root_entity.iter_entities()):
+        base = composer.Task if isinstance(owner, composer.Task) else composer.Entity
+        for name in names:
+            if getattr(type(owner), name) is not getattr(base, name):
+                found.append(f"{type(owner).__name__}.{name}")
+    return found
+
+
+def _refuse_unbatched_hooks(hooks: EnvironmentHooks, batch_task: BatchTask) -> None:
+    """Raises NotImplementedError for CPU hooks that a batch would otherwise skip."""
+    task = batch_task.task
+    if hooks.has_substep_hooks or hooks.has_after_step_hooks:
+        owners = _hook_owners(task, ("before_substep", "after_substep", "after_step"))
+        raise NotImplementedError(
+            f"{', '.join(owners)}: a batch steps its sub-steps on the device, without Python "
+            "hooks between them (before_substep, after_substep and after_step are not run)"
+        )
+    if hooks.has_before_step_hooks and type(batch_task).before_step is BatchTask.before_step:
+        owners = _hook_owners(task, ("before_step",))
+        raise NotImplementedError(
+            f"{', '.join(owners)} does more than set the controls; "
+            f"{type(batch_task).__name__} must override before_step to do it for every world"
+        )
+
+
+def _refuse_mjcf_variations(task: composer.Task) -> None:
+    """Raises NotImplementedError if the task or an entity changes its MJCF per episode."""
+    owners = [task, *task.root_entity.iter_entities()]
+    base_hooks = (composer.Task.initialize_episode_mjcf, composer.Entity.initialize_episode_mjcf)
+    for owner in owners:
+        hook = getattr(type(owner), "initialize_episode_mjcf", None)
+        if hook is not None and hook not in base_hooks:
+            raise NotImplementedError(
+                f"{type(owner).__name__}.initialize_episode_mjcf changes the MJCF model per "
+                "episode, which needs a recompile; a batch compiles once (put per-world "
+                "physics variation in batched_model_fields instead)"
+            )
