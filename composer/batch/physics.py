@@ -26,7 +26,7 @@ import numpy as np
 import mjcf
 from composer.batch import _warp
 from mjcf import binding as mjcf_binding
-from mjcf import field_layout
+from mujoco_physics import field_layout
 
 __all__ = ["BatchBinding", "BatchPhysics", "Contacts"]
 
