@@ -18,6 +18,14 @@ class Arena(Entity):
     Args (to the constructor):
       name: the model name, which scopes nothing (the arena is the root) but names
         the scene; defaults to 'base', as in dm_control.
+      xml_path: an MJCF file to start from instead of the built-in model, as in
+        dm_control; relative asset paths in the arena then resolve against its folder.
+
+    Relative asset paths added to an arena built in code resolve against the working
+    directory, like any `mjcf.RootElement`'s; when this class serves
+    `dm_control.composer.Arena` (the dm_control redirect, with dm_control installed), against
+    dm_control's `composer` folder, where dm_control's own arena model lives and relative to
+    which its arenas name their textures (`compiler texturedir='../locomotion/...'`).
     """
 
     _mjcf_root = BuiltAttribute(
@@ -26,8 +34,18 @@ class Arena(Entity):
         "creates the arena's model and its shared settings, then add to self.mjcf_model"
     )
 
-    def _build(self, name: str | None = None) -> None:
-        self._mjcf_root = mjcf.RootElement(model=name or "base")
+    def _build(self, name: str | None = None, xml_path: str | None = None) -> None:
+        if xml_path is not None:
+            self._mjcf_root = mjcf.from_path(xml_path)
+            if name:
+                self._mjcf_root.model = name
+            return
+        # Imported here: `python -m composer.dm_control_compat` must find that module not yet
+        # imported when the `composer` package is.
+        from composer import dm_control_compat
+
+        model_dir = dm_control_compat.real_package_dir("composer") or ""
+        self._mjcf_root = mjcf.RootElement(model=name or "base", model_dir=model_dir)
         root = self._mjcf_root
         root.compiler.set_attributes(angle="radian", boundmass=1e-5, boundinertia=1e-11)
         root.option.set_attributes(

@@ -182,6 +182,22 @@ def uninstall() -> None:
         del sys.modules[name]
 
 
+def real_package_dir(package: str) -> str | None:
+    """The folder of dm_control's own ``package`` ('composer', ...) while the redirect serves
+    it from this project and dm_control is installed; None otherwise.
+
+    dm_control code names some files relative to its own folders (its arenas give texture
+    paths relative to ``dm_control/composer``, where its arena model lives); this project's
+    classes serving those names resolve such paths there.
+    """
+    if not installed():
+        return None
+    spec = DmControlRedirect()._dm_control_spec()
+    locations = spec.submodule_search_locations or []
+    folder = os.path.join(locations[0], package) if locations else None
+    return folder if folder and os.path.isdir(folder) else None
+
+
 def _is_alias(name: str) -> bool:
     module = sys.modules[name]
     return isinstance(module, types.ModuleType) and module.__name__ == _target_name(name)

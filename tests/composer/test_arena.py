@@ -92,3 +92,69 @@ def test_attach_offset_with_position_and_quaternion_orients_the_entity():
 def test_attach_offset_with_wrong_number_of_values_is_an_error():
     with pytest.raises(ValueError, match="3 values.*7.*got 4"):
         composer.Arena().attach_offset(Box(), [0, 0, 0, 1])
+
+
+def _write_png(path):
+    from PIL import Image
+
+    path.parent.mkdir(parents=True, exist_ok=True)
+    Image.new("RGB", (4, 4), (0, 128, 0)).save(path)
+
+
+# An arena that names its texture as dm_control's locomotion arenas do: relative to the
+# folder of dm_control's own composer package.
+_TEXTURED_ARENA = """
+import sys
+sys.path.insert(0, {packages!r})
+{redirect}
+import composer, mjcf
+arena = composer.Arena()
+arena.mjcf_model.compiler.texturedir = "../assets"
+try:
+    arena.mjcf_model.asset.add("texture", name="grass", type="2d", file="grass.png")
+    mjcf.Physics.from_mjcf_model(arena.mjcf_model)
+    print("compiled")
+except FileNotFoundError as error:
+    print("missing", error)
+"""
+
+
+@pytest.mark.parametrize("redirect", [True, False])
+def test_arena_texture_paths_resolve_against_dm_controls_composer_folder_under_redirect(
+    tmp_path, redirect
+):
+    import subprocess
+    import sys
+
+    packages = tmp_path / "site"
+    (packages / "dm_control" / "composer").mkdir(parents=True)
+    (packages / "dm_control" / "__init__.py").write_text("")
+    _write_png(packages / "dm_control" / "assets" / "grass.png")
+    elsewhere = tmp_path / "work"
+    elsewhere.mkdir()
+    code = _TEXTURED_ARENA.format(
+        packages=str(packages),
+        redirect="from composer import dm_control_compat; dm_control_compat.install()"
+        if redirect
+        else "",
+    )
+    result = subprocess.run(
+        [sys.executable, "-c", code], capture_output=True, text=True, cwd=elsewhere, timeout=120
+    )
+    assert result.returncode == 0, result.stderr
+    if redirect:
+        assert result.stdout.strip() == "compiled"
+    else:
+        # Without the redirect the arena is this project's own: paths are relative to the
+        # working directory, where there is no ../assets/grass.png.
+        assert result.stdout.startswith("missing ")
+        assert "grass.png" in result.stdout
+
+
+def test_arena_from_xml_path_keeps_the_file_settings_and_takes_the_name(tmp_path):
+    path = tmp_path / "stage.xml"
+    path.write_text("<mujoco model='file_model'><option timestep='0.005'/></mujoco>")
+    arena = composer.Arena(name="renamed", xml_path=str(path))
+    assert arena.mjcf_model.model == "renamed"
+    assert arena.mjcf_model.option.timestep == 0.005
+    assert composer.Arena(xml_path=str(path)).mjcf_model.model == "file_model"
