@@ -17,6 +17,27 @@ version.check_version()
 from mujoco import *  # noqa: E402, F403  (dm_control.mujoco re-exports the bindings)
 
 from mujoco_physics import index, math, wrapper  # noqa: E402
-from mujoco_physics.engine import Physics, PhysicsError, action_spec  # noqa: E402
+from mujoco_physics.engine import (  # noqa: E402
+    Camera,
+    CameraMatrices,
+    MovableCamera,
+    Physics,
+    PhysicsError,
+    Pose,
+    TextOverlay,
+    action_spec,
+)
 
-__all__ = ["Physics", "PhysicsError", "action_spec", "index", "math", "wrapper"]
+__all__ = [
+    "Camera",
+    "CameraMatrices",
+    "MovableCamera",
+    "Physics",
+    "PhysicsError",
+    "Pose",
+    "TextOverlay",
+    "action_spec",
+    "index",
+    "math",
+    "wrapper",
+]

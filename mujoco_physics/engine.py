@@ -16,8 +16,15 @@ from absl import logging
 from dm_env import specs
 
 from mujoco_physics import index
+from mujoco_physics.camera import Camera, CameraMatrices, MovableCamera, Pose, TextOverlay
 from mujoco_physics.field_layout import ModelLayout
-from mujoco_physics.rendering import Contexts, Renderers
+from mujoco_physics.rendering import (
+    BOTH_SEGMENTATION_AND_DEPTH_ENABLED,
+    OVERLAYS_NOT_SUPPORTED_FOR_DEPTH_OR_SEGMENTATION,
+    RENDER_FLAG_OVERRIDES_NOT_SUPPORTED_FOR_DEPTH_OR_SEGMENTATION,
+    Contexts,
+    Renderers,
+)
 from mujoco_physics.wrapper.core import MjData, MjModel, enable_timer, flags_set
 
 _WARNING_NAMES = tuple(name for name in mujoco.mjtWarning.__members__ if name != "mjNWARNING")
@@ -25,7 +32,24 @@ _RK4 = int(mujoco.mjtIntegrator.mjINT_RK4)
 _ACTUATION_DISABLED = int(mujoco.mjtDisableBit.mjDSBL_ACTUATION)
 _STATE_SIGNATURE = int(mujoco.mjtState.mjSTATE_PHYSICS)
 _STATE_SIGNATURE_WITH_PLUGINS = _STATE_SIGNATURE | int(mujoco.mjtState.mjSTATE_PLUGIN)
+# dm_control's engine module holds the cameras; code imports them from here.
+__all__ = [
+    "Camera",
+    "CameraMatrices",
+    "MovableCamera",
+    "Physics",
+    "PhysicsError",
+    "Pose",
+    "TextOverlay",
+    "action_spec",
+]
+
 # Message formats, under the names dm_control's tests read them from.
+_BOTH_SEGMENTATION_AND_DEPTH_ENABLED = BOTH_SEGMENTATION_AND_DEPTH_ENABLED
+_OVERLAYS_NOT_SUPPORTED_FOR_DEPTH_OR_SEGMENTATION = OVERLAYS_NOT_SUPPORTED_FOR_DEPTH_OR_SEGMENTATION
+_RENDER_FLAG_OVERRIDES_NOT_SUPPORTED_FOR_DEPTH_OR_SEGMENTATION = (
+    RENDER_FLAG_OVERRIDES_NOT_SUPPORTED_FOR_DEPTH_OR_SEGMENTATION
+)
 _INVALID_PHYSICS_STATE = "Physics state is invalid. Warning(s) raised: {warning_names}"
 _KEYFRAME_ID_OUT_OF_RANGE = "keyframe_id {actual} is out of range: expected 0 to {max_valid}"
 # The MjData arrays of the default state, in mj_getState's order; those after the first
@@ -434,6 +458,7 @@ class Physics:
         segmentation: bool = False,
         scene_option=None,
         render_flag_overrides=None,
+        scene_callback=None,
     ) -> np.ndarray:
         """Renders a camera view off-screen.
 
@@ -441,17 +466,30 @@ class Physics:
           height, width: image size in pixels; at most the model's offscreen buffer size
             (``<visual><global offheight offwidth>``).
           camera_id: camera index or name; -1 is the free camera.
-          overlays: must be empty (text overlays are not supported).
+          overlays: ``TextOverlay``s drawn over an RGB image.
           depth: return depth in metres, (H, W) float32.
           segmentation: return (H, W, 2) int32 (object id, mjtObj type); -1 for background.
           scene_option: an optional ``mujoco.MjvOption``.
           render_flag_overrides: optional {flag name or mjtRndFlag: bool} for RGB images.
+          scene_callback: optional ``f(physics, scene)`` called before rendering (to add
+            geoms to the scene, say).
 
         Returns:
           (H, W, 3) uint8 RGB unless ``depth`` or ``segmentation``.
+
+        Raises:
+          ValueError: for an unknown camera, an image larger than the offscreen buffer,
+            depth with segmentation, or overlays or flag overrides with either.
         """
-        if overlays:
-            raise ValueError(f"text overlays are not supported; got {len(overlays)} overlay(s)")
+        if overlays or scene_callback is not None:
+            # One-off: a camera of its own can draw text and call back into the scene.
+            camera = Camera(self, height, width, camera_id, scene_callback=scene_callback)
+            try:
+                return camera.render(
+                    overlays, depth, segmentation, scene_option, render_flag_overrides
+                )
+            finally:
+                camera.close()
         if self._renderers is None:
             self._renderers = Renderers(self._sim.model)
         return self._renderers.render(

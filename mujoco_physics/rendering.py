@@ -9,8 +9,52 @@ import numpy as np
 
 _RENDER_FLAG_PREFIX = "mjRND_"
 
+# Messages of the render-request checks, under the names dm_control's tests read them from.
+BOTH_SEGMENTATION_AND_DEPTH_ENABLED = "depth and segmentation cannot both be requested"
+OVERLAYS_NOT_SUPPORTED_FOR_DEPTH_OR_SEGMENTATION = (
+    "overlays only apply to RGB images, not to depth or segmentation"
+)
+RENDER_FLAG_OVERRIDES_NOT_SUPPORTED_FOR_DEPTH_OR_SEGMENTATION = (
+    "render_flag_overrides only apply to RGB images"
+)
 
-def _render_flag(flag) -> int:
+
+def check_render_request(
+    depth: bool, segmentation: bool, overlays: bool, render_flag_overrides: bool
+) -> None:
+    """Raises ValueError for an image kind combined with what it cannot have."""
+    if depth and segmentation:
+        raise ValueError(BOTH_SEGMENTATION_AND_DEPTH_ENABLED)
+    if overlays and (depth or segmentation):
+        raise ValueError(OVERLAYS_NOT_SUPPORTED_FOR_DEPTH_OR_SEGMENTATION)
+    if render_flag_overrides and (depth or segmentation):
+        raise ValueError(RENDER_FLAG_OVERRIDES_NOT_SUPPORTED_FOR_DEPTH_OR_SEGMENTATION)
+
+
+def frame_limit_error(height: int, width: int, buffer) -> ValueError:
+    """The error for an image larger than the model's offscreen buffer (``vis.global_``)."""
+    return ValueError(
+        f"image of height {height} and width {width} exceeds the model's "
+        f"offscreen buffer ({buffer.offheight} by {buffer.offwidth}); raise "
+        "<visual><global offheight=... offwidth=.../></visual> in the model"
+    )
+
+
+@contextlib.contextmanager
+def overridden_flags(flags: np.ndarray, overrides: dict | None) -> Iterator[None]:
+    """Sets scene render ``flags`` from ``overrides`` ({name or mjtRndFlag: bool}) inside
+    the block and restores them after."""
+    saved = flags.copy()
+    try:
+        for flag, value in (overrides or {}).items():
+            flags[render_flag(flag)] = bool(value)
+        yield
+    finally:
+        flags[:] = saved
+
+
+def render_flag(flag) -> int:
+    """An ``mjtRndFlag`` index from a flag name ('wireframe') or value."""
     if isinstance(flag, str):
         member = f"{_RENDER_FLAG_PREFIX}{flag.upper()}"
         if member not in mujoco.mjtRndFlag.__members__:
@@ -65,10 +109,7 @@ class Renderers:
 
         Segmentation pixels hold (object id, ``mjtObj`` type); background is (-1, -1).
         """
-        if depth and segmentation:
-            raise ValueError("depth and segmentation cannot both be requested")
-        if render_flag_overrides and (depth or segmentation):
-            raise ValueError("render_flag_overrides only apply to RGB images")
+        check_render_request(depth, segmentation, False, bool(render_flag_overrides))
         camera = self.camera_id(camera_id)
         renderer = self._renderer(height, width)
         renderer.update_scene(data, camera=camera, scene_option=scene_option)
@@ -76,14 +117,10 @@ class Renderers:
             renderer.enable_depth_rendering()
         elif segmentation:
             renderer.enable_segmentation_rendering()
-        flags = renderer.scene.flags
-        saved_flags = flags.copy()
         try:
-            for flag, value in (render_flag_overrides or {}).items():
-                flags[_render_flag(flag)] = bool(value)
-            return renderer.render()
+            with overridden_flags(renderer.scene.flags, render_flag_overrides):
+                return renderer.render()
         finally:
-            flags[:] = saved_flags
             if depth:
                 renderer.disable_depth_rendering()
             elif segmentation:
@@ -110,11 +147,7 @@ class Renderers:
             # left a half-built Renderer whose finaliser raised.
             buffer = self._model.vis.global_
             if key[0] > buffer.offheight or key[1] > buffer.offwidth:
-                raise ValueError(
-                    f"image of height {key[0]} and width {key[1]} exceeds the model's "
-                    f"offscreen buffer ({buffer.offheight} by {buffer.offwidth}); raise "
-                    "<visual><global offheight=... offwidth=.../></visual> in the model"
-                )
+                raise frame_limit_error(key[0], key[1], buffer)
             renderer = mujoco.Renderer(self._model, height=key[0], width=key[1])
             self._renderers[key] = renderer
         return renderer

@@ -5,6 +5,7 @@ import numpy as np
 import pytest
 
 from mjcf.physics import Physics
+from mujoco_physics import TextOverlay
 
 # A red box 2 m in front of a camera looking along +y; nothing else in view.
 _XML = """
@@ -105,9 +106,11 @@ def test_image_larger_than_the_offscreen_buffer_is_an_error(physics):
         physics.render(height=480, width=640)
 
 
-def test_overlays_are_rejected(physics):
-    with pytest.raises(ValueError, match="overlays"):
-        physics.render(overlays=["text"])
+def test_overlays_are_rgb_only(physics):
+    overlay = TextOverlay(title="Title")
+    with pytest.raises(ValueError) as raised:
+        physics.render(60, 80, overlays=[overlay], depth=True)
+    assert str(raised.value) == "overlays only apply to RGB images, not to depth or segmentation"
 
 
 def test_render_after_free_is_a_clear_error():
