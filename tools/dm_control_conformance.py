@@ -40,7 +40,10 @@ import scratch_venv  # noqa: E402
 
 CACHE = scratch_venv.CACHE / "dm_control_conformance"
 DM_CONTROL_VERSION = "1.0.50"
-TEST_EXTRAS = ["mock", "pytest", "pillow", "h5py"]
+# What dm_control's tests import beyond its own requirements; protobuf below 7, whose
+# FieldDescriptor no longer has the `label` that dm_control 1.0.50's mocap loader reads (its
+# tracking tests fail with protobuf 7 whatever serves composer).
+TEST_EXTRAS = ["mock", "pytest", "pillow", "h5py", "protobuf<7"]
 
 #: dm_control packages whose test files are run: the three this project serves, and the
 #: packages built on them (entities of the manipulation suite, the Control Suite, its RL
@@ -86,6 +89,10 @@ KNOWN_FAILURES = {
     "mjcf/element_test.py::testAttachmentFrames": _FLOAT_TEXT,
     "mjcf/physics_test.py::test_plugins_elasticity": _COMPOSITE,
     "mujoco/engine_test.py::testSetGetPhysicsStateWithPlugin": _COMPOSITE,
+    "mujoco/render_test.py::test_repeatedly_create_and_destroy_rendering_contexts": (
+        "calls dm_control's private Physics._make_rendering_contexts; the engine makes one "
+        "renderer per image size on demand"
+    ),
     "mujoco/engine_test.py::testSuppressPhysicsError": (
         "mocks absl's deprecated logging.warn; the engine logs with logging.warning"
     ),

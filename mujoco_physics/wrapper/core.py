@@ -416,7 +416,8 @@ class MjvFigure(_OwnPointer, mujoco.MjvFigure):
 
 
 class MjvScene(_OwnPointer, mujoco.MjvScene):
-    """``mujoco.MjvScene`` for a wrapped model, with dm_control's ``ptr`` and ``free``."""
+    """``mujoco.MjvScene`` for a wrapped model, with dm_control's ``ptr``, ``free`` and
+    ``geoms`` (the ``ngeom`` geoms in use, not the whole buffer)."""
 
     def __init__(self, model: MjModel | None = None, max_geom: int = 1000):
         if model is None:
@@ -424,14 +425,41 @@ class MjvScene(_OwnPointer, mujoco.MjvScene):
         else:
             super().__init__(getattr(model, "ptr", model), max_geom)
 
+    @property
+    def geoms(self):
+        return super().geoms[: self.ngeom]
+
     def free(self) -> None:
         """Nothing to do: the scene's memory goes with the object."""
 
 
 class MjrContext(_OwnPointer, mujoco.MjrContext):
-    """``mujoco.MjrContext`` with dm_control's ``ptr``; needs a current OpenGL context."""
+    """``mujoco.MjrContext`` with dm_control's ``ptr`` and ``free``, made in ``gl_context``
+    (an object whose ``make_current()`` context manager yields a caller with
+    ``call(function, *args)``, as dm_control's renderers have), or in the current one.
+
+    Raises:
+      ValueError: for a ``font_scale`` that is not an ``mjtFontScale`` value.
+    """
 
     def __init__(
         self, model: MjModel, gl_context=None, font_scale=mujoco.mjtFontScale.mjFONTSCALE_150
     ):
-        super().__init__(getattr(model, "ptr", model), font_scale)
+        scales = {int(value) for value in mujoco.mjtFontScale.__members__.values()}
+        if int(font_scale) not in scales:
+            raise ValueError(f"font_scale: expected one of {sorted(scales)}, got {font_scale!r}")
+        self._gl_context = gl_context
+        model = getattr(model, "ptr", model)
+        if gl_context is None:
+            super().__init__(model, int(font_scale))
+        else:
+            with gl_context.make_current() as caller:
+                caller.call(super().__init__, model, int(font_scale))
+
+    def free(self) -> None:
+        """Frees the context's OpenGL resources now (in its OpenGL context)."""
+        if self._gl_context is None:
+            mujoco.MjrContext.free(self)
+        else:
+            with self._gl_context.make_current() as caller:
+                caller.call(mujoco.MjrContext.free, self)

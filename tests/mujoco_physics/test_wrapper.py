@@ -77,3 +77,16 @@ def test_visualisation_structs_pass_themselves_as_ptr_to_mujoco():
     camera = wrapper.MjvCamera()
     mujoco.mjv_defaultFreeCamera(wrapper.MjModel.from_xml_string(_XML).ptr, camera.ptr)
     assert camera.type == mujoco.mjtCamera.mjCAMERA_FREE
+
+
+def test_scene_geoms_are_the_ones_in_use():
+    scene = wrapper.MjvScene(wrapper.MjModel.from_xml_string(_XML), max_geom=10)
+    assert len(scene.geoms) == 0
+    scene.ngeom = 2
+    assert len(scene.geoms) == 2
+
+
+def test_mjr_context_names_a_bad_font_scale():
+    with pytest.raises(ValueError) as raised:
+        wrapper.MjrContext(wrapper.MjModel.from_xml_string(_XML), font_scale=99)
+    assert str(raised.value) == "font_scale: expected one of [50, 100, 150, 200, 250, 300], got 99"
