@@ -220,7 +220,7 @@ def _trajectory_gap(domain, task, steps):
     return gap
 
 trajectories = {}
-for name in ("cartpole-swingup", "walker-walk", "cheetah-run", "humanoid-run", "finger-spin"):
+for name in ("cartpole-swingup", "walker-walk", "cheetah-run", "humanoid-run", "acrobot-swingup"):
     try:
         trajectories[name] = _trajectory_gap(*name.split("-"), int(sys.argv[1]))
     except Exception as e:
