@@ -16,28 +16,12 @@ version.check_version()
 
 from mujoco import *  # noqa: E402, F403  (dm_control.mujoco re-exports the bindings)
 
-from mujoco_physics import index, math, wrapper  # noqa: E402
-from mujoco_physics.engine import (  # noqa: E402
-    Camera,
-    CameraMatrices,
-    MovableCamera,
-    Physics,
-    PhysicsError,
-    Pose,
-    TextOverlay,
-    action_spec,
+from mujoco_physics import (  # noqa: E402
+    engine,
+    index,
+    math,
+    wrapper,
 )
+from mujoco_physics.engine import *  # noqa: E402, F403  (Physics, the cameras, action_spec)
 
-__all__ = [
-    "Camera",
-    "CameraMatrices",
-    "MovableCamera",
-    "Physics",
-    "PhysicsError",
-    "Pose",
-    "TextOverlay",
-    "action_spec",
-    "index",
-    "math",
-    "wrapper",
-]
+__all__ = [*engine.__all__, "index", "math", "wrapper"]
