@@ -7,6 +7,7 @@ import shutil
 import subprocess
 import sys
 import textwrap
+import time
 
 import dm_env
 import mujoco
@@ -236,6 +237,18 @@ def _screenshot(display):
     return np.asarray(image_grab.grab(xdisplay=display).convert("L")).astype(int)
 
 
+def _screenshot_once_drawn(display, timeout=5.0):
+    """A screenshot taken once the screen is no longer one flat colour, or after `timeout` s:
+    the viewer resizes its window asynchronously and repaints it on its next frame."""
+    deadline = time.monotonic() + timeout
+    while True:
+        screen = _screenshot(display)
+        _, counts = np.unique(screen, return_counts=True)
+        if counts.max() < 0.99 * screen.size or time.monotonic() > deadline:
+            return screen
+        time.sleep(0.2)
+
+
 def test_window_shows_scene_and_status_then_exits_cleanly_after_max_steps(display, tmp_path):
     process = _start(
         display,
@@ -261,7 +274,7 @@ def test_window_shows_scene_and_status_then_exits_cleanly_after_max_steps(displa
     )
     try:
         assert process.stdout.readline() == "ready\n", process.stderr.read()
-        screen = _screenshot(display)
+        screen = _screenshot_once_drawn(display)
         process.stdin.write("\n")
         process.stdin.flush()
         output, errors = process.communicate(timeout=60)
