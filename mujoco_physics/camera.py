@@ -14,7 +14,12 @@ from typing import TYPE_CHECKING, NamedTuple
 import mujoco
 import numpy as np
 
-from mujoco_physics.rendering import check_render_request, frame_limit_error, overridden_flags
+from mujoco_physics.rendering import (
+    camera_index,
+    check_render_request,
+    frame_limit_error,
+    overridden_flags,
+)
 
 if TYPE_CHECKING:
     from mujoco_physics.engine import Physics
@@ -127,13 +132,7 @@ class Camera:
         buffer = model.vis.global_
         if height > buffer.offheight or width > buffer.offwidth:
             raise frame_limit_error(height, width, buffer)
-        if isinstance(camera_id, str):
-            camera_id = physics.model.name2id(camera_id, "camera")
-        if not -1 <= camera_id < model.ncam:
-            raise ValueError(
-                f"camera_id: expected -1 (free camera) or a camera index below {model.ncam}, "
-                f"got {camera_id}"
-            )
+        camera_id = camera_index(model, camera_id)
         self._physics = physics
         self._scene_callback = scene_callback
         geoms = max_geom or 2 * (model.ngeom + model.nsite + model.njnt + model.nbody) + 1000

@@ -380,11 +380,17 @@ class Physics:
           sig: an ``mjtState`` bit mask for ``mj_getState``; by default qpos, qvel and act
             (plus actuator history and plugin state where the model has them).
         """
-        signature = self._state_signature if sig is None else int(sig)
-        size = self._state_size if sig is None else mujoco.mj_stateSize(self._sim.model, signature)
+        signature, size = self._state_layout(sig)
         state = np.empty(size)
         mujoco.mj_getState(self._sim.model, self._sim.data, state, signature)
         return state
+
+    def _state_layout(self, sig: int | None) -> tuple[int, int]:
+        """The ``mjtState`` signature ``sig`` stands for (the default one for None) and
+        the size of its state."""
+        if sig is None:
+            return self._state_signature, self._state_size
+        return int(sig), mujoco.mj_stateSize(self._sim.model, int(sig))
 
     def _physics_state_items(self) -> list[np.ndarray]:
         """The MjData arrays that ``get_state()`` concatenates: qpos, qvel, act, then actuator
@@ -403,8 +409,7 @@ class Physics:
         Raises:
           ValueError: if ``physics_state`` does not have the state's shape.
         """
-        signature = self._state_signature if sig is None else int(sig)
-        size = self._state_size if sig is None else mujoco.mj_stateSize(self._sim.model, signature)
+        signature, size = self._state_layout(sig)
         state = np.asarray(physics_state, dtype=np.float64)
         if state.shape != (size,):
             raise ValueError(

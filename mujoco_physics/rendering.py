@@ -31,6 +31,25 @@ def check_render_request(
         raise ValueError(RENDER_FLAG_OVERRIDES_NOT_SUPPORTED_FOR_DEPTH_OR_SEGMENTATION)
 
 
+def camera_index(model: mujoco.MjModel, camera_id) -> int:
+    """A camera index from a camera name or index; -1 is the free camera.
+
+    Raises:
+      ValueError: for an unknown name or an index outside [-1, ncam).
+    """
+    if isinstance(camera_id, str):
+        index = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_CAMERA, camera_id)
+        if index < 0:
+            raise ValueError(f"camera_id {camera_id!r}: the model has no camera of that name")
+        return index
+    index = int(camera_id)
+    if not -1 <= index < model.ncam:
+        raise ValueError(
+            f"camera_id {camera_id}: expected -1 (free camera) or a camera index below {model.ncam}"
+        )
+    return index
+
+
 def frame_limit_error(height: int, width: int, buffer) -> ValueError:
     """The error for an image larger than the model's offscreen buffer (``vis.global_``)."""
     return ValueError(
@@ -76,23 +95,8 @@ class Renderers:
         self._renderers = {}
 
     def camera_id(self, camera_id) -> int:
-        """A camera index from a camera name or index; -1 is the free camera.
-
-        Raises:
-          ValueError: for an unknown name or an index outside [-1, ncam).
-        """
-        if isinstance(camera_id, str):
-            index = mujoco.mj_name2id(self._model, mujoco.mjtObj.mjOBJ_CAMERA, camera_id)
-            if index < 0:
-                raise ValueError(f"camera_id {camera_id!r}: the model has no camera of that name")
-            return index
-        index = int(camera_id)
-        if not -1 <= index < self._model.ncam:
-            raise ValueError(
-                f"camera_id {camera_id}: expected -1 (free camera) or a camera index below "
-                f"{self._model.ncam}"
-            )
-        return index
+        """A camera index from a camera name or index (see ``camera_index``)."""
+        return camera_index(self._model, camera_id)
 
     def render(
         self,
