@@ -3,7 +3,7 @@
 import math
 import numbers
 from collections.abc import Sequence
-from typing import NamedTuple
+from typing import Any, NamedTuple
 
 import dm_env
 import numpy as np
@@ -11,12 +11,13 @@ from dm_env import specs
 
 import composer
 import mjcf
+from composer.batch import _warp, actions, kernels, outputs
 from composer.batch.observables import BatchObservables
 from composer.batch.physics import BatchPhysics
 from composer.batch.task import BatchTask, for_task
 from composer.hooks import EnvironmentHooks
 
-__all__ = ["BatchEnvironment", "BatchTimeStep"]
+__all__ = ["BatchEnvironment", "BatchTimeStep", "EpisodeEnds"]
 
 _FIRST, _MID, _LAST = (
     int(t) for t in (dm_env.StepType.FIRST, dm_env.StepType.MID, dm_env.StepType.LAST)
@@ -26,27 +27,52 @@ _FIRST, _MID, _LAST = (
 class BatchTimeStep(NamedTuple):
     """What `BatchEnvironment.reset` and `step` return, one row per world.
 
+    The arrays are of the environment's `array_type` (NumPy by default; see
+    `composer.batch.outputs`).
+
     Attributes:
       step_type: int8 (num_envs,), `dm_env.StepType` values: FIRST for a world whose
         episode starts, MID, or LAST for one whose episode ended at this step.
-      reward: float (num_envs,); 0 for a FIRST world.
-      discount: float (num_envs,); 1 for a FIRST world.
-      observation: dict of arrays (num_envs, *the CPU environment's observation shape).
+      reward: float64 (num_envs,); 0 for a FIRST world.
+      discount: float64 (num_envs,); 1 for a FIRST world.
+      observation: dict of float32 arrays (num_envs, *the CPU environment's observation
+        shape).
     """
 
-    step_type: np.ndarray
-    reward: np.ndarray
-    discount: np.ndarray
-    observation: dict[str, np.ndarray]
+    step_type: Any
+    reward: Any
+    discount: Any
+    observation: dict[str, Any]
 
-    def first(self) -> np.ndarray:
-        return self.step_type == _FIRST
+    def first(self) -> Any:
+        """Which worlds start an episode: a bool array (NumPy for Warp step types)."""
+        return _step_types(self.step_type) == _FIRST
 
-    def mid(self) -> np.ndarray:
-        return self.step_type == _MID
+    def mid(self) -> Any:
+        """Which worlds are mid-episode: a bool array (NumPy for Warp step types)."""
+        return _step_types(self.step_type) == _MID
 
-    def last(self) -> np.ndarray:
-        return self.step_type == _LAST
+    def last(self) -> Any:
+        """Which worlds ended their episode: a bool array (NumPy for Warp step types)."""
+        return _step_types(self.step_type) == _LAST
+
+
+def _step_types(step_type):
+    # A Warp array has no elementwise comparison; its values come to the host to compare.
+    return step_type.numpy() if type(step_type).__module__.startswith("warp") else step_type
+
+
+class EpisodeEnds(NamedTuple):
+    """How the episodes that ended at the last step ended, as host arrays (num_envs,) bool.
+
+    Attributes:
+      terminated: the task ended the episode (discount 0), Gymnasium's `terminated`.
+      truncated: the episode ended with a non-zero discount (the time limit), Gymnasium's
+        `truncated`.
+    """
+
+    terminated: np.ndarray
+    truncated: np.ndarray
 
 
 def _check_positive_int(**kwargs) -> int:
@@ -110,6 +136,9 @@ class BatchEnvironment:
       batched_model_fields: MjModel fields to give one row per world, in addition to the
         task's own (see `BatchPhysics`).
       nconmax, njmax: per-world contact and constraint capacity for MuJoCo Warp.
+      array_type: what `reset` and `step` hand out: "numpy" (host arrays), or "warp",
+        "torch" or "jax": arrays on `device`, without copies (see `composer.batch.outputs`).
+        Actions may be NumPy, Warp, torch or JAX arrays whatever the array type.
 
     Raises:
       ValueError: for a bad argument, named in the message.
@@ -134,8 +163,10 @@ class BatchEnvironment:
         batched_model_fields: Sequence[str] = (),
         nconmax: int | None = None,
         njmax: int | None = None,
+        array_type: str = "numpy",
     ):
         self.num_envs = _check_positive_int(num_envs=num_envs)
+        outputs.check_array_type(array_type)
         if not isinstance(device, str):
             raise ValueError(
                 f"device: expected a Warp device name such as 'cpu' or 'cuda:0', got {device!r}"
@@ -166,6 +197,9 @@ class BatchEnvironment:
             njmax=njmax,
         )
         self._batch_task.after_compile(self._physics)
+        self._outputs = outputs.DeviceOutputs(_warp.load()[0], self._physics.device, array_type)
+        self._on_device = array_type != "numpy"
+        self._controls_on_device = type(self._batch_task).before_step is BatchTask.before_step
         self._action_spec = cpu_task.action_spec(host)
         self._observables = BatchObservables(
             cpu_task.observables, self._physics, strip_singleton_obs_buffer_dim
@@ -175,6 +209,7 @@ class BatchEnvironment:
         )
         self._steps = np.zeros(self.num_envs, dtype=np.int64)
         self._reset_next = np.ones(self.num_envs, dtype=bool)
+        self._discount = np.ones(self.num_envs)
 
     @property
     def physics(self) -> BatchPhysics:
@@ -221,33 +256,64 @@ class BatchEnvironment:
         """
         self._reset_worlds(np.arange(self.num_envs))
         n = self.num_envs
+        self._discount = np.ones(n)
+        return self._time_step(np.full(n, _FIRST, np.int8), np.zeros(n), self._discount)
+
+    def _time_step(self, step_type, reward, discount) -> BatchTimeStep:
+        """The results of this step, handed out as `array_type` (see the module docstring)."""
+        if not self._on_device:
+            return BatchTimeStep(step_type, reward, discount, self._observables.read())
+        observation = self._observables.read_device(self._outputs)
         return BatchTimeStep(
-            np.full(n, _FIRST, np.int8), np.zeros(n), np.ones(n), self._observables.read()
+            self.hand_out(step_type),
+            self.hand_out(reward),
+            self.hand_out(discount),
+            {name: self._outputs.hand_out(value) for name, value in observation.items()},
         )
 
-    def _check_action(self, action) -> np.ndarray:
+    def hand_out(self, values: np.ndarray) -> Any:
+        """Host `values` as this environment's `array_type` (on its device unless NumPy)."""
+        if not self._on_device:
+            return values
+        return self._outputs.hand_out(self._outputs.upload(values))
+
+    def episode_ends(self) -> EpisodeEnds:
+        """How the episodes that ended at the last `step` ended (host arrays).
+
+        Returns:
+          An `EpisodeEnds`: `terminated` where the task ended an episode with discount 0,
+          `truncated` where an episode ended with a non-zero discount (a time limit).
+        """
+        ended = self._reset_next
+        terminated = ended & (self._discount == 0.0)
+        return EpisodeEnds(terminated=terminated, truncated=ended & ~terminated)
+
+    def _apply_action(self, action) -> None:
+        """Checks `action` and sets the controls of every world (see `actions`)."""
         expected = (self.num_envs,) + tuple(self._action_spec.shape)
-        try:
-            array = np.asarray(action, dtype=np.float64)
-        except (TypeError, ValueError) as error:
-            raise ValueError(
-                f"action: expected a float array of shape {expected}, got {action!r}"
-            ) from error
-        if array.shape != expected:
-            raise ValueError(
-                f"action: expected shape {expected} (num_envs, *action_spec().shape), "
-                f"got {array.shape}"
-            )
-        if not np.isfinite(array).all():
-            worlds = np.unique(np.nonzero(~np.isfinite(array))[0])
-            raise ValueError(f"action: NaN or infinity in the actions of worlds {worlds.tolist()}")
-        return array
+        checked = actions.check_action(action, expected, self._outputs)
+        physics = self._physics
+        if not isinstance(checked, np.ndarray):
+            if self._controls_on_device:
+                wp = _warp.load()[0]
+                ctrl = physics.warp_data.ctrl
+                wp.launch(
+                    kernels.kernels().write_float32,
+                    dim=ctrl.shape,
+                    inputs=[checked, ctrl],
+                    device=physics.device,
+                )
+                return
+            checked = checked.numpy().astype(np.float64).reshape(expected)
+        self._batch_task.before_step(physics, checked)
 
     def step(self, action) -> BatchTimeStep:
         """Steps every world by one control step; worlds after LAST start a new episode.
 
         Args:
-          action: shape (num_envs, *action_spec().shape).
+          action: shape (num_envs, *action_spec().shape): a NumPy array (or anything
+            NumPy reads), or a Warp, torch or JAX array on the batch's device (used there,
+            without a copy, when the task only sets the controls).
 
         Returns:
           A `BatchTimeStep`: FIRST (reward 0, discount 1) for worlds that were reset, LAST
@@ -258,12 +324,12 @@ class BatchEnvironment:
           ValueError: for an action of the wrong shape or with NaN or infinity; nothing is
             stepped.
         """
-        action = self._check_action(action)
         if self._reset_next.all():
+            actions.check_action(action, (self.num_envs, *self._action_spec.shape), self._outputs)
             return self.reset()
         restarting = np.flatnonzero(self._reset_next)
         physics, task = self._physics, self._batch_task
-        task.before_step(physics, action)
+        self._apply_action(action)
         physics.step(self._n_sub_steps)
         if restarting.size:
             # These worlds were stepped with the others; their reset overwrites that step.
@@ -280,8 +346,8 @@ class BatchEnvironment:
         step_type[restarting] = _FIRST
         reward[restarting] = 0.0
         discount[restarting] = 1.0
-        self._reset_next = ended
-        return BatchTimeStep(step_type, reward, discount, self._observables.read())
+        self._reset_next, self._discount = ended, discount
+        return self._time_step(step_type, reward, discount)
 
 
 def _hook_owners(task: composer.Task, names: tuple[str, ...]) -> list[str]:

@@ -5,7 +5,9 @@ once, with Gymnasium's NEXT_STEP autoreset: the step after a world's episode end
 that world (its action is ignored) and returns its first observation with reward 0. An
 episode that ends with discount 0 (the task ended it) is terminated, one that ends with a
 non-zero discount (the time limit) truncated, as in `composer.gym.GymnasiumEnv`.
-Observations are the batch's arrays: a dict of (num_envs, ...) float32 arrays.
+Observations are the batch's arrays: a dict of (num_envs, ...) float32 arrays, of the
+batch's `array_type` (NumPy, or Warp, torch or JAX arrays on its device), as are rewards,
+terminations and truncations.
 """
 
 from typing import Any
@@ -71,16 +73,15 @@ class WarpVectorEnv(VectorEnv):
 
         Returns:
           observations (dict of (num_envs, ...) arrays), rewards (num_envs,) float64,
-          terminations and truncations (num_envs,) bool, and infos with 'discount'.
+          terminations and truncations (num_envs,) bool, and infos with 'discount', all
+          of the batch's `array_type`.
         """
         time_step: BatchTimeStep = self.env.step(actions)
-        last = time_step.last()
-        terminated = last & (time_step.discount == 0.0)
-        truncated = last & ~terminated
+        ends = self.env.episode_ends()
         return (
             time_step.observation,
             time_step.reward,
-            terminated,
-            truncated,
+            self.env.hand_out(ends.terminated),
+            self.env.hand_out(ends.truncated),
             {"discount": time_step.discount},
         )

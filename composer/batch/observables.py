@@ -13,14 +13,17 @@ identity on a buffer of one sample.
 
 import functools
 from collections.abc import Callable, Mapping
+from typing import Any, NamedTuple
 
 import numpy as np
 
+from composer.batch import _warp, kernels
+from composer.batch.outputs import DeviceOutputs
 from composer.entity import _RootBodyFeature
 from composer.observation.observable import base
 from composer.observation.observable.mjcf import MJCFFeature
 
-__all__ = ["BatchObservables", "batch_reader"]
+__all__ = ["BatchObservables", "FieldSelection", "batch_reader"]
 
 Reader = Callable[[], np.ndarray]
 
@@ -41,9 +44,33 @@ def batch_reader(observable: base.Observable, physics) -> Reader:
     )
 
 
-def _per_world(index) -> tuple:
-    """The index that applies `index` (an index of one world's value) to every world."""
-    return (slice(None),) + (index if isinstance(index, tuple) else (index,))
+class FieldSelection(NamedTuple):
+    """An observable that is a fixed selection of one field's entries in every world.
+
+    Calling it reads the selection on the host; `BatchObservables.read_device` gathers it on
+    the device instead, without a host round trip.
+
+    Attributes:
+      field: the batched MjModel/MjData field (`BatchPhysics.field`).
+      columns: int array, the flat indices into one world's field of the observation's
+        entries, in the shape of one world's observation.
+    """
+
+    field: Any
+    columns: np.ndarray
+
+    def __call__(self) -> np.ndarray:
+        values = self.field.read()
+        return values.reshape(values.shape[0], -1)[:, self.columns]
+
+
+def _selection(binding, kind: str, indices) -> FieldSelection:
+    """The entries of `binding.<kind>` that the per-world `indices` select, in turn."""
+    field, index = binding._field_and_index(kind)
+    columns = np.arange(int(np.prod(field.c_shape))).reshape(field.c_shape)[index]
+    for key in indices:
+        columns = columns[key]
+    return FieldSelection(field, np.asarray(columns))
 
 
 @batch_reader.register
@@ -51,23 +78,13 @@ def _mjcf_feature(observable: MJCFFeature, physics) -> Reader:
     # MJCFFeature keeps its field name, elements and indices private; this reader is its
     # batched twin in the same package.
     binding = physics.bind(observable._mjcf_element)
-    kind = observable._kind
-    keys = [_per_world(index) for index in observable._indices]
-
-    def read():
-        value = getattr(binding, kind)
-        for key in keys:
-            value = value[key]
-        return value
-
-    return read
+    return _selection(binding, observable._kind, observable._indices)
 
 
 @batch_reader.register
 def _root_body_feature(observable: _RootBodyFeature, physics) -> Reader:
     binding = physics.bind(observable._entity.root_body)
-    kind, key = observable._kind, _per_world(observable._index)
-    return lambda: getattr(binding, kind)[key]
+    return _selection(binding, observable._kind, (observable._index,))
 
 
 def _check_options(name: str, observable: base.Observable) -> None:
@@ -118,6 +135,8 @@ class BatchObservables:
             _check_options(name, observable)
             self._readers[name] = batch_reader(observable, physics)
         self._add_buffer_axis = not strip_singleton_obs_buffer_dim
+        self._num_envs = physics.num_envs
+        self._gathers: dict[str, _DeviceGather] | None = None
 
     def read(self) -> dict[str, np.ndarray]:
         """Returns the current observation of every world, by key.
@@ -131,3 +150,58 @@ class BatchObservables:
             value = np.asarray(read())
             observation[name] = value[:, None] if self._add_buffer_axis else value
         return observation
+
+    def read_device(self, outputs: DeviceOutputs) -> dict[str, Any]:
+        """Returns the current observation of every world as new Warp arrays on the device.
+
+        A `FieldSelection` of a float32 field is gathered on the device by one kernel launch,
+        without a host round trip; any other observable is read on the host and copied to
+        the device.
+
+        Returns:
+          A dict of Warp arrays, shaped as `read` shapes its arrays.
+        """
+        if self._gathers is None:
+            self._gathers = _plan_gathers(self._readers, outputs)
+        wp = _warp.load()[0]
+        observation = {}
+        for name, read in self._readers.items():
+            gather = self._gathers.get(name)
+            if gather is None:
+                value = outputs.upload(np.asarray(read()))
+            else:
+                value = outputs.empty((self._num_envs, gather.columns.shape[0]))
+                wp.launch(
+                    kernels.kernels().gather_columns,
+                    dim=value.shape,
+                    inputs=[gather.source, gather.columns, value],
+                    device=outputs.device,
+                )
+                value = value.reshape((self._num_envs, *gather.shape))
+            if self._add_buffer_axis:
+                value = value.reshape((value.shape[0], 1, *value.shape[1:]))
+            observation[name] = value
+        return observation
+
+
+class _DeviceGather(NamedTuple):
+    """What `read_device` launches for one observable: source rows and their columns."""
+
+    source: Any
+    columns: Any
+    shape: tuple[int, ...]
+
+
+def _plan_gathers(readers: Mapping[str, Reader], outputs: DeviceOutputs) -> dict:
+    """The device gathers of the readers that are float32 `FieldSelection`s, by key."""
+    wp = _warp.load()[0]
+    gathers = {}
+    for name, read in readers.items():
+        if not isinstance(read, FieldSelection):
+            continue
+        source = read.field.device_rows()
+        if source is None:
+            continue
+        columns = wp.array(read.columns.ravel().astype(np.int32), device=outputs.device)
+        gathers[name] = _DeviceGather(source, columns, read.columns.shape)
+    return gathers

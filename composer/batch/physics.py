@@ -24,7 +24,7 @@ import mujoco
 import numpy as np
 
 import mjcf
-from composer.batch import _warp
+from composer.batch import _warp, kernels
 from mjcf import binding as mjcf_binding
 from mujoco_physics import field_layout
 
@@ -71,6 +71,21 @@ class _Field:
             return host.reshape((num_envs,) + self.c_shape)
         # A shared field: one row (or no world axis at all) for every world.
         return np.broadcast_to(host.reshape(self.c_shape), (num_envs,) + self.c_shape)
+
+    def device_rows(self):
+        """The field's device memory as a float32 (worlds, entries of one world) Warp array.
+
+        Returns:
+          The alias (one row for a model field shared by every world), or None for a field
+          that is not float32 or not contiguous on the device.
+        """
+        array = self._device_array()
+        wp = self._physics._wp
+        scalar = getattr(array.dtype, "_wp_scalar_type_", array.dtype)
+        if scalar is not wp.float32 or not array.is_contiguous:
+            return None
+        per_world = int(np.prod(self.c_shape))
+        return kernels.rows(array, wp.float32, array.capacity // 4 // per_world)
 
     def write(self, worlds: np.ndarray, index, values: np.ndarray) -> None:
         """Writes `values` (shape (len(worlds), *selected)) into rows `index` of `worlds`."""
@@ -407,7 +422,7 @@ class BatchPhysics:
         mjw.step1(model, data)
         if self._acc_sensors is not None:
             wp.launch(
-                _restore_columns_kernel(wp),
+                kernels.kernels().restore_columns,
                 dim=(self.num_envs, self._acc_sensors.shape[0]),
                 inputs=[self._acc_sensors, self._saved_sensordata, data.sensordata],
                 device=self.device,
@@ -459,7 +474,7 @@ class BatchPhysics:
         finally:
             option.disableflags = flags
         for source, target in zip(saved, self._world_arrays):
-            _copy_worlds(wp, keep, source, target)
+            _copy_worlds(keep, source, target)
 
     def set_state(self, env_ids: np.ndarray, states: np.ndarray, spec: int) -> None:
         """Writes `mj_getState` vectors `states` (one row per id) into worlds `env_ids`."""
@@ -478,58 +493,12 @@ class BatchPhysics:
             )
 
 
-_KERNELS: dict[str, Any] = {}
-
-
-def _restore_columns_kernel(wp):
-    kernel = _KERNELS.get("restore_columns")
-    if kernel is None:
-
-        @wp.kernel(module="unique")
-        def restore_columns(
-            columns: wp.array(dtype=wp.int32),
-            saved: wp.array2d(dtype=wp.float32),
-            target: wp.array2d(dtype=wp.float32),
-        ):
-            world, k = wp.tid()
-            column = columns[k]
-            target[world, column] = saved[world, column]
-
-        kernel = _KERNELS["restore_columns"] = restore_columns
-    return kernel
-
-
-def _copy_worlds_kernel(wp):
-    kernel = _KERNELS.get("copy_worlds")
-    if kernel is None:
-
-        @wp.kernel(module="unique")
-        def copy_worlds(
-            keep: wp.array(dtype=wp.bool),
-            source: wp.array2d(dtype=wp.uint8),
-            target: wp.array2d(dtype=wp.uint8),
-        ):
-            world, k = wp.tid()
-            if keep[world]:
-                target[world, k] = source[world, k]
-
-        kernel = _KERNELS["copy_worlds"] = copy_worlds
-    return kernel
-
-
-def _byte_rows(wp, array):
-    """A (nworld, bytes per world) uint8 alias of a contiguous per-world Warp array."""
-    nworld = array.shape[0]
-    row_bytes = array.capacity // nworld
-    return wp.array(
-        ptr=array.ptr, dtype=wp.uint8, shape=(nworld, row_bytes), device=array.device, copy=False
-    )
-
-
-def _copy_worlds(wp, keep, source, target) -> None:
-    source_bytes, target_bytes = _byte_rows(wp, source), _byte_rows(wp, target)
+def _copy_worlds(keep, source, target) -> None:
+    wp = _warp.load()[0]
+    source_bytes = kernels.rows(source, wp.uint8, source.shape[0])
+    target_bytes = kernels.rows(target, wp.uint8, target.shape[0])
     wp.launch(
-        _copy_worlds_kernel(wp),
+        kernels.kernels().copy_worlds,
         dim=source_bytes.shape,
         inputs=[keep, source_bytes, target_bytes],
         device=target.device,
