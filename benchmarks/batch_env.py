@@ -16,8 +16,9 @@ Baselines, on this machine's cores:
     >= 2 at the best num_envs).
 
 Usage: python benchmarks/batch_env.py [--device cpu|cuda:0] [--num-envs 1,64,1024,4096]
-  [--seconds 3] [--task lift_brick_features]. On Warp's CPU device the default num_envs are
-  1, 16 and 64 (larger batches take minutes per measurement there).
+  [--seconds 3] [--task lift_brick_features] [--array-type numpy|warp|torch|jax]. On Warp's
+  CPU device the default num_envs are 1, 16 and 64 (larger batches take minutes per
+  measurement there).
 """
 
 import argparse
@@ -57,12 +58,19 @@ def _rate(step, count: int, seconds: float) -> float:
             return calls * count / elapsed
 
 
-def _batch_rows(task: str, num_envs: int, device: str, seconds: float) -> tuple[float, float]:
-    env = batch.load(task, num_envs, device=device, seed=0)
+def _batch_rows(
+    task: str, num_envs: int, device: str, seconds: float, array_type: str
+) -> tuple[float, float]:
+    env = batch.load(task, num_envs, device=device, seed=0, array_type=array_type)
     env.reset()
     action = np.zeros((num_envs, *env.action_spec().shape))
-    batch_rate = _rate(lambda: env.step(action), num_envs, seconds)
     physics = env.physics
+
+    def step():
+        env.step(action)
+        wp.synchronize_device(physics.device)  # device outputs return before they are ready
+
+    batch_rate = _rate(step, num_envs, seconds)
     n_sub_steps = env.task.task.physics_steps_per_control_step
     model, data = physics.warp_model, physics.warp_data
     if physics.is_cuda:
@@ -131,6 +139,9 @@ def main() -> None:
     parser.add_argument("--num-envs", default=None, help="comma-separated numbers of worlds")
     parser.add_argument("--seconds", type=float, default=3.0, help="time per measurement")
     parser.add_argument("--task", default="lift_brick_features", choices=batch.BATCHED)
+    parser.add_argument(
+        "--array-type", default="numpy", help="what the batch hands out: numpy, warp, torch, jax"
+    )
     args = parser.parse_args()
     default_sizes = "1,16,64" if args.device == "cpu" else "1,64,1024,4096,8192"
     sizes = [int(n) for n in (args.num_envs or default_sizes).split(",")]
@@ -138,12 +149,15 @@ def main() -> None:
     threaded = _threaded_cpu(args.task, args.seconds)
     ceiling = _mj_step_ceiling(args.task, args.seconds)
     print(
-        f"task {args.task}, device {args.device}, {os.cpu_count()} cores, "
+        f"task {args.task}, device {args.device}, array_type {args.array_type}, "
+        f"{os.cpu_count()} cores, "
         f"load average {os.getloadavg()[0]:.2f}"
     )
     print(f"{'num_envs':>8} {'batch/s':>10} {'raw warp/s':>11} {'overhead':>9} {'vs ceiling':>11}")
     for num_envs in sizes:
-        batch_rate, raw_rate = _batch_rows(args.task, num_envs, args.device, args.seconds)
+        batch_rate, raw_rate = _batch_rows(
+            args.task, num_envs, args.device, args.seconds, args.array_type
+        )
         print(
             f"{num_envs:>8} {batch_rate:>10.0f} {raw_rate:>11.0f} {raw_rate / batch_rate:>9.2f} "
             f"{batch_rate / ceiling:>11.2f}"

@@ -19,9 +19,7 @@ STEPS = 4
 def _actions(env, seed=0):
     spec = env.action_spec()
     rng = np.random.RandomState(seed)
-    return [
-        rng.uniform(spec.minimum, spec.maximum, (NUM_ENVS, *spec.shape)) for _ in range(STEPS)
-    ]
+    return [rng.uniform(spec.minimum, spec.maximum, (NUM_ENVS, *spec.shape)) for _ in range(STEPS)]
 
 
 def _host(time_step: BatchTimeStep) -> BatchTimeStep:
@@ -152,3 +150,31 @@ def test_gymnasium_vector_env_returns_warp_arrays():
         assert isinstance(value, wp.array)
     assert terminated.numpy().dtype == bool and not terminated.numpy().any()
     env.close()
+
+
+@pytest.fixture
+def jax_x64():
+    jax = pytest.importorskip("jax", reason="JAX is optional and not installed (out of CI)")
+    # Rewards and discounts are float64; without x64 JAX would hold them as float32.
+    enabled = jax.config.jax_enable_x64
+    jax.config.update("jax_enable_x64", True)
+    yield jax.numpy
+    jax.config.update("jax_enable_x64", enabled)
+
+
+def test_jax_outputs_equal_the_numpy_outputs_and_take_jax_actions(numpy_run, name, jax_x64):
+    jnp = jax_x64
+    actions, expected = numpy_run
+    env = manipulation_batch.load(name, NUM_ENVS, seed=3, array_type="jax")
+    steps = [env.reset()] + [env.step(jnp.asarray(action)) for action in actions]
+    for time_step, reference in zip(steps, expected):
+        assert all(isinstance(v, type(jnp.zeros(1))) for v in time_step.observation.values())
+        _assert_same(
+            BatchTimeStep(
+                np.asarray(time_step.step_type),
+                np.asarray(time_step.reward),
+                np.asarray(time_step.discount),
+                {key: np.asarray(value) for key, value in time_step.observation.items()},
+            ),
+            reference,
+        )
