@@ -18,17 +18,17 @@ import math
 import numbers
 import os
 import pathlib
-from collections.abc import Callable, Iterable
-from typing import TYPE_CHECKING, Any, NamedTuple
+from collections.abc import Iterable
+from typing import TYPE_CHECKING, NamedTuple
 
 import numpy as np
 
-if TYPE_CHECKING:
-    import dm_env
+from composer.episode_tally import EpisodeTally, Policy
+from composer.utils import argument_checks
 
+if TYPE_CHECKING:
     import composer
 
-Policy = Callable[["dm_env.TimeStep"], Any]
 
 EXTENSIONS = (".mp4", ".gif")
 _NO_ACTION = object()
@@ -60,22 +60,8 @@ def fps_for(control_timestep: float) -> float:
     Raises:
       ValueError: if `control_timestep` is not a positive number of seconds.
     """
-    if (
-        isinstance(control_timestep, bool)
-        or not isinstance(control_timestep, numbers.Real)
-        or not control_timestep > 0
-        or not np.isfinite(control_timestep)
-    ):
-        raise ValueError(
-            f"control_timestep: expected a positive number of seconds, got {control_timestep!r}"
-        )
-    return round(1.0 / float(control_timestep), 2)
-
-
-def _positive_int(name: str, value) -> int:
-    if isinstance(value, bool) or not isinstance(value, numbers.Integral) or value < 1:
-        raise ValueError(f"{name}: expected an integer >= 1, got {value!r}")
-    return int(value)
+    seconds = argument_checks.number(above=0, unit="seconds", control_timestep=control_timestep)
+    return round(1.0 / seconds, 2)
 
 
 def _has_no_time_limit(environment) -> bool:
@@ -99,6 +85,18 @@ def video_extension(path: str | os.PathLike) -> str:
     return suffix
 
 
+def check_frame_size(extension: str, *, width: int, height: int) -> None:
+    """Raises ValueError naming `width` or `height` if an `extension` video cannot hold it.
+
+    An mp4 (H.264 with yuv420p colour) needs an even width and height; a gif takes any.
+    """
+    if extension == ".mp4" and (width % 2 or height % 2):
+        odd = "width" if width % 2 else "height"
+        raise ValueError(
+            f"{odd}: an mp4 needs an even frame size (H.264, yuv420p), got {width}x{height}"
+        )
+
+
 class VideoWriter:
     """Writes RGB frames to an mp4 (H.264, through imageio-ffmpeg) or a gif (through Pillow).
 
@@ -118,10 +116,8 @@ class VideoWriter:
 
     def __init__(self, path: str | os.PathLike, fps: float):
         self._extension = video_extension(path)
-        if isinstance(fps, bool) or not isinstance(fps, numbers.Real) or not fps > 0:
-            raise ValueError(f"fps: expected a positive number, got {fps!r}")
         self.path = pathlib.Path(path)
-        self.fps = float(fps)
+        self.fps = argument_checks.number(above=0, fps=fps)
         self.frames = 0
         self._shape = None
         self._writer = self._open()
@@ -161,11 +157,7 @@ class VideoWriter:
                 f"got shape {frame.shape} dtype {frame.dtype}"
             )
         if self._shape is None:
-            if self._extension == ".mp4" and (frame.shape[0] % 2 or frame.shape[1] % 2):
-                raise ValueError(
-                    f"frame size {frame.shape[1]}x{frame.shape[0]}: an mp4 needs an even "
-                    "width and height (H.264, yuv420p)"
-                )
+            check_frame_size(self._extension, width=frame.shape[1], height=frame.shape[0])
             self._shape = frame.shape
         elif frame.shape != self._shape:
             raise ValueError(
@@ -237,11 +229,10 @@ def record_video(
         `policy` and `actions` are given. Nothing is written then.
       ImportError: when imageio or imageio-ffmpeg is not installed.
     """
-    video_extension(path)
-    width = _positive_int("width", width)
-    height = _positive_int("height", height)
+    width = argument_checks.integer(width=width)
+    height = argument_checks.integer(height=height)
     if max_steps is not None:
-        max_steps = _positive_int("max_steps", max_steps)
+        max_steps = argument_checks.integer(max_steps=max_steps)
     if (policy is None) == (actions is None):
         raise ValueError(
             "policy, actions: expected exactly one of a policy (TimeStep -> action) or a "
@@ -249,11 +240,7 @@ def record_video(
         )
     if policy is not None and not callable(policy):
         raise ValueError(f"policy: expected a callable TimeStep -> action, got {policy!r}")
-    if pathlib.Path(path).suffix.lower() == ".mp4" and (width % 2 or height % 2):
-        odd = "width" if width % 2 else "height"
-        raise ValueError(
-            f"{odd}: an mp4 needs an even frame size (H.264, yuv420p), got {width}x{height}"
-        )
+    check_frame_size(video_extension(path), width=width, height=height)
     if policy is not None and max_steps is None and _has_no_time_limit(environment):
         raise ValueError(
             "max_steps: expected a number of steps for a policy on an environment without a "
@@ -267,19 +254,17 @@ def record_video(
     # Rendering the reset frame first checks the camera and size before a file is created.
     first_frame = environment.physics.render(height=height, width=width, camera_id=camera_id)
     remaining = None if actions is None else iter(actions)
-    steps = 0
-    episode_return = 0.0
+    tally = EpisodeTally()
+    tally.start_episode()
     with VideoWriter(path, fps) as writer:
         writer.append(first_frame)
-        while not timestep.last() and (max_steps is None or steps < max_steps):
+        while not timestep.last() and (max_steps is None or tally.steps < max_steps):
             action = policy(timestep) if remaining is None else next(remaining, _NO_ACTION)
             if action is _NO_ACTION:
                 break
             timestep = environment.step(action)
-            steps += 1
-            if timestep.reward is not None:
-                episode_return += float(np.sum(timestep.reward))
+            tally.add_step(timestep.reward)
             writer.append(
                 environment.physics.render(height=height, width=width, camera_id=camera_id)
             )
-    return EpisodeVideo(writer.path, writer.frames, fps, episode_return, steps)
+    return EpisodeVideo(writer.path, writer.frames, fps, tally.episode_return, tally.steps)

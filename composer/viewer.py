@@ -35,11 +35,10 @@ machine run it under Xvfb. Closing the window ends `launch`.
 from __future__ import annotations
 
 import math
-import numbers
 import threading
 import time
 from collections.abc import Callable
-from typing import TYPE_CHECKING, Any, NamedTuple
+from typing import TYPE_CHECKING, NamedTuple
 
 import glfw
 import mujoco
@@ -48,12 +47,13 @@ import numpy as np
 from absl import logging
 
 from composer import _x11_window
+from composer.episode_tally import EpisodeTally, Policy
+from composer.utils import argument_checks
 
 if TYPE_CHECKING:
     import dm_env
 
 #: Chooses the action for the next step from the last TimeStep.
-Policy = Callable[["dm_env.TimeStep"], Any]
 #: Makes the environment to show; called once, with no arguments.
 EnvironmentLoader = Callable[[], "dm_env.Environment"]
 
@@ -119,13 +119,7 @@ class Controls:
 
 
 def _speed(speed) -> float:
-    if (
-        isinstance(speed, bool)
-        or not isinstance(speed, numbers.Real)
-        or not MIN_SPEED <= speed <= MAX_SPEED
-    ):
-        raise ValueError(f"speed: expected a number in [{MIN_SPEED}, {MAX_SPEED}], got {speed!r}")
-    return float(speed)
+    return argument_checks.number(at_least=MIN_SPEED, at_most=MAX_SPEED, speed=speed)
 
 
 class _WindowLook(NamedTuple):
@@ -248,10 +242,7 @@ def launch(
       RuntimeError: calling `environment_loader` raised (the error is chained).
     """
     controls = Controls(speed)
-    if max_steps is not None and (
-        isinstance(max_steps, bool) or not isinstance(max_steps, numbers.Integral) or max_steps < 1
-    ):
-        raise ValueError(f"max_steps: expected an integer >= 1 or None, got {max_steps!r}")
+    max_steps = argument_checks.integer(or_none=True, max_steps=max_steps)
     if policy is not None and not callable(policy):
         raise ValueError(f"policy: expected a callable TimeStep -> action or None, got {policy!r}")
     look = _window_look(title, width, height)
@@ -262,17 +253,18 @@ def launch(
     _check_physics(environment, environment_loader)
     control_timestep = _control_timestep(environment)
     default_action = _default_action(environment.action_spec())
-    steps, episodes, episode_step, episode_return = 0, 1, 0, 0.0
+    tally = EpisodeTally()
+    tally.start_episode()
     status = ViewerStatus(0, 1, 0, None, 0.0, controls.speed, controls.paused)
     window = _open_window(environment.physics, controls, show_ui, look)
     try:
         deadline = time.perf_counter()
-        while window.handle.is_running() and (max_steps is None or steps < max_steps):
+        while window.handle.is_running() and (max_steps is None or tally.steps < max_steps):
             stepped = False
             if controls.take_reset() or timestep.last():
                 timestep = environment.reset()
                 default_action = _default_action(environment.action_spec())
-                episodes, episode_step, episode_return = episodes + 1, 0, 0.0
+                tally.start_episode()
                 if environment.physics.data.ptr is not window.data:
                     # A recompile changed the model's structure: show the new Physics.
                     _close_window(window)
@@ -280,18 +272,16 @@ def launch(
             elif controls.take_step():
                 action = default_action if policy is None else policy(timestep)
                 timestep = environment.step(action)
-                steps, episode_step, stepped = steps + 1, episode_step + 1, True
-                if timestep.reward is not None:
-                    episode_return += float(np.sum(timestep.reward))
-            reward = None if timestep.reward is None else float(np.sum(timestep.reward))
+                tally.add_step(timestep.reward)
+                stepped = True
             status = ViewerStatus(
-                steps,
-                episodes,
-                episode_step,
-                reward,
-                episode_return,
-                controls.speed,
-                controls.paused,
+                steps=tally.steps,
+                episodes=tally.episodes,
+                episode_step=tally.episode_steps,
+                reward=tally.last_reward,
+                episode_return=tally.episode_return,
+                speed=controls.speed,
+                paused=controls.paused,
             )
             display.show(window.handle, status)
             window.handle.sync()
@@ -307,10 +297,9 @@ def launch(
 def _window_look(title, width, height) -> _WindowLook:
     if not isinstance(title, str):
         raise ValueError(f"title: expected a string, got {title!r}")
-    for name, value in (("width", width), ("height", height)):
-        if isinstance(value, bool) or not isinstance(value, numbers.Integral) or value < 1:
-            raise ValueError(f"{name}: expected an integer >= 1 (screen pixels), got {value!r}")
-    return _WindowLook(title, int(width), int(height))
+    width = argument_checks.integer(unit="screen pixels", width=width)
+    height = argument_checks.integer(unit="screen pixels", height=height)
+    return _WindowLook(title, width, height)
 
 
 _EXPECTED_ENVIRONMENT = (

@@ -16,6 +16,7 @@ from composer.batch.observables import BatchObservables
 from composer.batch.physics import BatchPhysics
 from composer.batch.task import BatchTask, for_task
 from composer.hooks import EnvironmentHooks
+from composer.utils import argument_checks
 
 __all__ = ["BatchEnvironment", "BatchTimeStep", "EpisodeEnds"]
 
@@ -73,13 +74,6 @@ class EpisodeEnds(NamedTuple):
 
     terminated: np.ndarray
     truncated: np.ndarray
-
-
-def _check_positive_int(**kwargs) -> int:
-    ((name, value),) = kwargs.items()
-    if isinstance(value, numbers.Integral) and not isinstance(value, bool) and value >= 1:
-        return int(value)
-    raise ValueError(f"{name}: expected an int >= 1, got {value!r}")
 
 
 def _random_states(num_envs: int, random_state, random_states) -> list[np.random.RandomState]:
@@ -165,7 +159,7 @@ class BatchEnvironment:
         njmax: int | None = None,
         array_type: str = "numpy",
     ):
-        self.num_envs = _check_positive_int(num_envs=num_envs)
+        self.num_envs = argument_checks.integer(num_envs=num_envs)
         outputs.check_array_type(array_type)
         if not isinstance(device, str):
             raise ValueError(
@@ -181,7 +175,7 @@ class BatchEnvironment:
         self._n_sub_steps = (
             cpu_task.physics_steps_per_control_step
             if n_sub_steps is None
-            else _check_positive_int(n_sub_steps=n_sub_steps)
+            else argument_checks.integer(n_sub_steps=n_sub_steps)
         )
         self._random_states = _random_states(self.num_envs, random_state, random_states)
         host = mjcf.Physics.from_mjcf_model(cpu_task.root_entity.mjcf_model)

@@ -7,14 +7,14 @@ after ``reset()`` and one after each step.
 
 from __future__ import annotations
 
-import numbers
 import os
 import pathlib
 from typing import Any
 
 import gymnasium
-import numpy as np
 
+from composer.episode_tally import EpisodeTally
+from composer.utils import argument_checks
 from composer.video import EXTENSIONS, EpisodeVideo, VideoWriter
 
 
@@ -55,8 +55,7 @@ class VideoRecorder(gymnasium.Wrapper):
                 f"env: expected an environment with render_mode 'rgb_array', "
                 f"got render_mode {env.render_mode!r}"
             )
-        if isinstance(every, bool) or not isinstance(every, numbers.Integral) or every < 1:
-            raise ValueError(f"every: expected an integer >= 1, got {every!r}")
+        every = argument_checks.integer(every=every)
         if not isinstance(extension, str) or extension.lower() not in EXTENSIONS:
             raise ValueError(f"extension: expected one of {list(EXTENSIONS)}, got {extension!r}")
         self._extension = extension.lower()
@@ -66,8 +65,7 @@ class VideoRecorder(gymnasium.Wrapper):
                 raise ValueError(
                     "fps: not given and env.metadata has no 'render_fps'; pass fps=..."
                 )
-        if isinstance(fps, bool) or not isinstance(fps, numbers.Real) or not fps > 0:
-            raise ValueError(f"fps: expected a positive number, got {fps!r}")
+        fps = argument_checks.number(above=0, fps=fps)
         self.folder = pathlib.Path(folder)
         self.every = int(every)
         self.name_prefix = name_prefix
@@ -75,8 +73,7 @@ class VideoRecorder(gymnasium.Wrapper):
         self.videos: list[EpisodeVideo] = []
         self._episode = -1
         self._writer: VideoWriter | None = None
-        self._steps = 0
-        self._return = 0.0
+        self._tally = EpisodeTally()
 
     @property
     def episode_index(self) -> int:
@@ -91,16 +88,14 @@ class VideoRecorder(gymnasium.Wrapper):
             self.folder.mkdir(parents=True, exist_ok=True)
             path = self.folder / f"{self.name_prefix}-{self._episode:06d}{self._extension}"
             self._writer = VideoWriter(path, self.fps)
-            self._steps = 0
-            self._return = 0.0
+            self._tally.start_episode()
             self._writer.append(self.env.render())
         return observation, info
 
     def step(self, action):
         observation, reward, terminated, truncated, info = self.env.step(action)
         if self._writer is not None:
-            self._steps += 1
-            self._return += float(np.sum(reward))
+            self._tally.add_step(reward)
             self._writer.append(self.env.render())
             if terminated or truncated:
                 self._finish()
@@ -116,5 +111,11 @@ class VideoRecorder(gymnasium.Wrapper):
         writer, self._writer = self._writer, None
         writer.close()
         self.videos.append(
-            EpisodeVideo(writer.path, writer.frames, writer.fps, self._return, self._steps)
+            EpisodeVideo(
+                writer.path,
+                writer.frames,
+                writer.fps,
+                self._tally.episode_return,
+                self._tally.episode_steps,
+            )
         )

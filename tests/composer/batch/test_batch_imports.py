@@ -30,5 +30,5 @@ def test_unregistered_task_is_refused_with_the_way_to_register_one():
 
 @pytest.mark.parametrize("num_envs", [0, -3, 2.5, True, "4"])
 def test_num_envs_must_be_a_positive_int(num_envs):
-    with pytest.raises(ValueError, match=r"num_envs: expected an int >= 1, got"):
+    with pytest.raises(ValueError, match=r"num_envs: expected an integer >= 1, got"):
         composer.batch.BatchEnvironment(composer.NullTask(composer.Arena()), num_envs)
