@@ -29,8 +29,9 @@ import sys
 from pathlib import Path
 from typing import NamedTuple
 
-sys.path.insert(0, str(Path(__file__).resolve().parent.parent / "tools"))
-import scratch_venv  # noqa: E402
+# The repository root, for the scratch venvs of `tools` (a script's own folder is on the path).
+sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
+from tools import scratch_venv  # noqa: E402
 
 DM_CONTROL = "dm-control==1.0.50"
 DM_CONTROL_MUJOCO = "mujoco==3.17.0"

@@ -4,7 +4,7 @@ MuJoCo's passive viewer creates its GLFW window in a thread it keeps to itself, 
 ("MuJoCo : <model name>") and a size (2/3 of the screen) the Python API cannot set, and GLFW
 calls are only safe on the thread that owns the window. So the window is found and changed
 from outside GLFW: a separate Xlib connection (used by the calling thread alone) looks for
-the top-level window whose ``_NET_WM_PID`` is this process and whose name is the viewer's,
+the top-level window whose `_NET_WM_PID` is this process and whose name is the viewer's,
 then sets its title and size. GLFW sees the new size as an ordinary resize event. On
 anything but X11 (Wayland without XWayland, macOS) `retitle_and_resize` says so instead.
 """
@@ -170,7 +170,7 @@ def retitle_and_resize(title: str, width: int, height: int) -> None:
     """Gives the viewer window of this process `title` and a `width` x `height` size.
 
     Raises:
-      OSError: not on X11 (no ``DISPLAY``, no libX11), or no viewer window was found.
+      OSError: not on X11 (no `DISPLAY`, no libX11), or no viewer window was found.
     """
     if not os.environ.get("DISPLAY"):
         raise OSError("DISPLAY is not set (not an X11 session)")

@@ -1,25 +1,27 @@
-"""Serve ``dm_control.composer``, ``dm_control.mjcf``, ``dm_control.mujoco`` and
-``dm_control.viewer`` from this project's packages.
+"""Serve `dm_control.composer`, `dm_control.mjcf`, `dm_control.mujoco` and
+`dm_control.viewer` from this project's packages.
 
-``install()`` puts an import hook in front of ``sys.meta_path``: afterwards
-``import dm_control.composer`` (and every ``dm_control.composer.*`` / ``dm_control.mjcf.*`` /
-``dm_control.mujoco.*`` module) returns this project's ``composer`` / ``mjcf`` /
-``mujoco_physics`` module of the same path. The rest of an installed dm_control
-(``dm_control.suite``, ``dm_control.rl``, ``dm_control.locomotion``,
-``dm_control.entities``, ``dm_control.manipulation``, ``dm_control.utils``, ...) stays the real
+`install()` puts an import hook in front of `sys.meta_path`: afterwards
+`import dm_control.composer` (and every `dm_control.composer.*` / `dm_control.mjcf.*` /
+`dm_control.mujoco.*` module) returns this project's `composer` / `mjcf` /
+`mujoco_physics` module of the same path. The rest of an installed dm_control
+(`dm_control.suite`, `dm_control.rl`, `dm_control.locomotion`,
+`dm_control.entities`, `dm_control.manipulation`, `dm_control.utils`, ...) stays the real
 one and, since it imports those packages through the same names, runs on this project.
-``dm_control.rl.control.PhysicsError`` becomes this project's ``PhysicsError``, so that
-dm_control's code catches the errors our ``Physics`` raises. ``dm_control.viewer`` is the
-module ``composer.viewer``, whose ``launch`` takes dm_control's arguments; dm_control's viewer
-submodules (``dm_control.viewer.application``, ...) are not served, and importing one says
-``'dm_control.viewer' is not a package``. Without an installed dm_control, a bare
-``dm_control`` package is provided so that ``from dm_control import composer, mjcf`` works.
+`dm_control.rl.control.PhysicsError` becomes this project's `PhysicsError`, so that
+dm_control's code catches the errors our `Physics` raises. `dm_control.viewer` is the
+module `composer.viewer`, whose `launch` takes dm_control's arguments; dm_control's viewer
+submodules (`dm_control.viewer.application`, ...) are not served, and importing one says
+`'dm_control.viewer' is not a package`. Without an installed dm_control, a bare
+`dm_control` package is provided so that `from dm_control import composer, mjcf` works.
 
-Run a script written for dm_control without editing it::
+Run a script written for dm_control without editing it:
 
-    python -m composer.dm_control_compat SCRIPT [ARGS...]
+```bash
+python -m composer.dm_control_compat SCRIPT [ARGS...]
+```
 
-Modules imported under the ``dm_control`` names before ``install()`` keep what they hold;
+Modules imported under the `dm_control` names before `install()` keep what they hold;
 call it before anything imports dm_control.
 """
 
@@ -50,7 +52,7 @@ SHARED_ATTRIBUTES: dict[str, dict[str, str]] = {
 
 
 def _target_name(fullname: str) -> str | None:
-    """Returns this project's module name serving ``fullname``, or None if not redirected."""
+    """Returns this project's module name serving `fullname`, or None if not redirected."""
     for prefix, target in REDIRECTED_PACKAGES.items():
         if fullname == prefix or fullname.startswith(prefix + "."):
             return target + fullname[len(prefix) :]
@@ -76,7 +78,7 @@ class _AliasLoader(importlib.abc.Loader):
 
 
 class _SharingLoader(importlib.abc.Loader):
-    """Runs a real dm_control module, then points its ``SHARED_ATTRIBUTES`` at ours."""
+    """Runs a real dm_control module, then points its `SHARED_ATTRIBUTES` at ours."""
 
     def __init__(self, loader: importlib.abc.Loader, shared: dict[str, str]):
         self._loader = loader
@@ -93,7 +95,7 @@ class _SharingLoader(importlib.abc.Loader):
 
 
 class _BareDmControlLoader(importlib.abc.Loader):
-    """Creates an empty ``dm_control`` package when no real one is installed."""
+    """Creates an empty `dm_control` package when no real one is installed."""
 
     def create_module(self, spec):
         return None
@@ -105,7 +107,7 @@ class _BareDmControlLoader(importlib.abc.Loader):
 
 
 class DmControlRedirect(importlib.abc.MetaPathFinder):
-    """Finder that serves the names in ``REDIRECTED_PACKAGES`` from this project."""
+    """Finder that serves the names in `REDIRECTED_PACKAGES` from this project."""
 
     def find_spec(self, fullname, path=None, target=None):
         if fullname == "dm_control":
@@ -157,10 +159,10 @@ def installed() -> bool:
 
 
 def install() -> None:
-    """Serves ``REDIRECTED_PACKAGES`` from this project from now on.
+    """Serves `REDIRECTED_PACKAGES` from this project from now on.
 
-    Idempotent. Raises ``RuntimeError`` naming the modules when dm_control's own
-    ``composer``, ``mjcf``, ``mujoco`` or ``viewer`` is already imported, since objects made
+    Idempotent. Raises `RuntimeError` naming the modules when dm_control's own
+    `composer`, `mjcf`, `mujoco` or `viewer` is already imported, since objects made
     from those would not mix with this project's.
     """
     if installed():
@@ -176,18 +178,18 @@ def install() -> None:
 
 
 def uninstall() -> None:
-    """Removes the redirect and forgets the aliases of ``REDIRECTED_PACKAGES``."""
+    """Removes the redirect and forgets the aliases of `REDIRECTED_PACKAGES`."""
     sys.meta_path[:] = [f for f in sys.meta_path if not isinstance(f, DmControlRedirect)]
     for name in [name for name in sys.modules if _target_name(name) is not None]:
         del sys.modules[name]
 
 
 def real_package_dir(package: str) -> str | None:
-    """The folder of dm_control's own ``package`` ('composer', ...) while the redirect serves
+    """The folder of dm_control's own `package` ('composer', ...) while the redirect serves
     it from this project and dm_control is installed; None otherwise.
 
     dm_control code names some files relative to its own folders (its arenas give texture
-    paths relative to ``dm_control/composer``, where its arena model lives); this project's
+    paths relative to `dm_control/composer`, where its arena model lives); this project's
     classes serving those names resolve such paths there.
     """
     if not installed():
@@ -204,7 +206,7 @@ def _is_alias(name: str) -> bool:
 
 
 def main(argv: list[str] | None = None) -> int:
-    """Runs ``SCRIPT [ARGS...]`` (or ``-m MODULE [ARGS...]``) with the redirect installed."""
+    """Runs `SCRIPT [ARGS...]` (or `-m MODULE [ARGS...]`) with the redirect installed."""
     argv = list(sys.argv[1:] if argv is None else argv)
     usage = "usage: python -m composer.dm_control_compat (SCRIPT | -m MODULE) [ARGS...]"
     if not argv or argv[0] in ("-h", "--help"):

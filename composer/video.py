@@ -1,12 +1,12 @@
 """Episode videos: run a policy (or replay actions) on an environment and write an mp4 or gif.
 
-Needs the ``video`` extra (``pip install 'mujoco-composer[video]'``: imageio and
-imageio-ffmpeg); imageio is imported on first use, never by ``import composer``.
+Needs the `video` extra (`pip install 'mujoco-composer[video]'`: imageio and
+imageio-ffmpeg); imageio is imported on first use, never by `import composer`.
 
-Frames and timing, the rule both `record_video` and ``composer.gym.video_recorder`` follow:
-a video holds one frame for the state after ``reset()`` and one after every step, so an
+Frames and timing, the rule both `record_video` and `composer.gym.video_recorder` follow:
+a video holds one frame for the state after `reset()` and one after every step, so an
 episode of N steps gives N + 1 frames. It plays in real time: the frame rate is
-``1 / control_timestep`` rounded to two decimals (50 for 0.02 s, 33.33 for 0.03 s). An mp4
+`1 / control_timestep` rounded to two decimals (50 for 0.02 s, 33.33 for 0.03 s). An mp4
 stores that rate exactly as a fraction; a gif stores each frame's duration in whole
 hundredths of a second, so 50 fps (20 ms) is exact and 33.33 fps plays as 30 ms frames, and
 Pillow's gif writer merges consecutive identical frames into one longer frame.
@@ -40,7 +40,7 @@ class EpisodeVideo(NamedTuple):
 
     Attributes:
       path: the video file.
-      frames: frames handed to the writer, ``steps + 1`` (a gif decodes to fewer when
+      frames: frames handed to the writer, `steps + 1` (a gif decodes to fewer when
         consecutive frames are identical; see the module docstring).
       fps: frames per second.
       episode_return: the sum of the episode's rewards.
@@ -210,12 +210,12 @@ def record_video(
     Args:
       environment: a `composer.Environment` (anything with `reset`, `step`,
         `control_timestep()` and `physics.render` works).
-      path: the file to write; ``.mp4`` or ``.gif`` picks the format.
+      path: the file to write; `.mp4` or `.gif` picks the format.
       policy: a callable TimeStep -> action.
       actions: an iterable of actions to replay instead of a policy.
       camera_id: a camera name or index in the model; -1 (default) is the free camera.
       width, height: frame size in pixels, at most the model's offscreen buffer
-        (``<visual><global offwidth offheight>``, 640x480 unless set); even for mp4.
+        (`<visual><global offwidth offheight>`, 640x480 unless set); even for mp4.
       max_steps: stop after this many steps even if the episode goes on.
 
     Returns:

@@ -1,25 +1,26 @@
 """Interactive viewer: an environment in MuJoCo's passive viewer, acted on in real time.
 
-`launch` takes dm_control's arguments (``launch(environment_loader, policy=None,
-title="Explorer", width=1024, height=768)``, served as ``dm_control.viewer`` by
+`launch` takes dm_control's arguments (`launch(environment_loader, policy=None,
+title="Explorer", width=1024, height=768)`, served as `dm_control.viewer` by
 `composer.dm_control_compat`) for a `composer.Environment`, a Control Suite environment or
-any dm_env environment whose ``physics`` has ``model.ptr`` / ``data.ptr`` (the raw
-``mujoco.MjModel`` / ``mujoco.MjData``). It opens ``mujoco.viewer.launch_passive`` on that
+any dm_env environment whose `physics` has `model.ptr` / `data.ptr` (the raw
+`mujoco.MjModel` / `mujoco.MjData`). It opens `mujoco.viewer.launch_passive` on that
 physics and steps the environment itself, sleeping so that each control step lasts
-``control_timestep / speed`` seconds of wall-clock time (when stepping is slower than that,
+`control_timestep / speed` seconds of wall-clock time (when stepping is slower than that,
 it runs as fast as it can).
-Keys, read through launch_passive's ``key_callback``:
 
-==============  ===============================================
-space           pause / resume
-right arrow     one step while paused
-backspace       start a new episode
-``+`` / ``-``   double / halve the speed (1/16x to 16x)
-==============  ===============================================
+Keys, read through launch_passive's `key_callback`:
+
+| key | action |
+|---|---|
+| space | pause / resume |
+| right arrow | one step while paused |
+| backspace | start a new episode |
+| `+` / `-` | double / halve the speed (1/16x to 16x) |
 
 The step in the episode, last reward, episode return and speed are drawn in the window's
-top-left corner with ``Handle.set_texts``. MuJoCo releases whose viewer lacks
-``set_texts`` get the same line logged (absl ``logging.info``) at most once a second instead.
+top-left corner with `Handle.set_texts`. MuJoCo releases whose viewer lacks
+`set_texts` get the same line logged (absl `logging.info`) at most once a second instead.
 
 MuJoCo's viewer runs its own key handling as well; in particular its backspace resets the
 MjData, which our reset then overwrites with the task's initial state.
@@ -28,7 +29,7 @@ Unlike dm_control's viewer, this one starts running rather than paused, and back
 the environment instead of calling the loader again. The window's title and size are set
 through X11 (`composer._x11_window`); elsewhere MuJoCo's own are kept, with a warning.
 
-Needs a display and GLFW (the ``glfw`` package comes with ``mujoco``); on a headless
+Needs a display and GLFW (the `glfw` package comes with `mujoco`); on a headless
 machine run it under Xvfb. Closing the window ends `launch`.
 """
 
@@ -211,24 +212,24 @@ def launch(
     Resets the environment, then steps it with `policy`, starting a new episode after each
     LAST step or backspace. Blocks until the window is closed or `max_steps` steps were
     taken, then closes the window. The positional arguments are dm_control's
-    ``viewer.launch``'s.
+    `viewer.launch`'s.
 
     Args:
       environment_loader: the environment, or a callable taking no arguments that returns
         it (called once). A `composer.Environment`, a Control Suite environment, or any
-        object with dm_env's ``reset``, ``step`` and ``action_spec`` and a ``physics`` whose
-        ``model.ptr`` / ``data.ptr`` are a ``mujoco.MjModel`` / ``mujoco.MjData``.
+        object with dm_env's `reset`, `step` and `action_spec` and a `physics` whose
+        `model.ptr` / `data.ptr` are a `mujoco.MjModel` / `mujoco.MjData`.
       policy: a callable TimeStep -> action, or None for the action spec's resting action:
         the midpoint of a bounded range, the finite bound of a half-bounded one, else zero.
       title: the window's title.
       width: the window's width in screen pixels.
       height: the window's height in screen pixels.
       speed: initial playback speed, a multiple of real time in [1/16, 16]. One step lasts
-        the environment's ``control_timestep()`` (its physics timestep if it has none).
+        the environment's `control_timestep()` (its physics timestep if it has none).
       max_steps: stop after this many steps in all (None: only when the window closes).
       on_refresh: called with the viewer handle and the `ViewerStatus` after each window
         refresh, in the calling thread (for scripting and tests; calling
-        ``handle.close()`` ends `launch` like closing the window).
+        `handle.close()` ends `launch` like closing the window).
       show_ui: show MuJoCo's left and right settings panels.
 
     Returns:
@@ -238,7 +239,7 @@ def launch(
       ValueError: naming the argument for a bad `speed`, `max_steps`, `policy`, `title`,
         `width`, `height`, or for an `environment_loader` of None (as dm_control does).
       TypeError: `environment_loader` is neither an environment nor a callable returning
-        one, or its environment's physics has no ``model.ptr`` / ``data.ptr``.
+        one, or its environment's physics has no `model.ptr` / `data.ptr`.
       RuntimeError: calling `environment_loader` raised (the error is chained).
     """
     controls = Controls(speed)

@@ -1,20 +1,20 @@
-"""MjModel fields that only describe appearance: writing them cannot change ``mj_forward``.
+"""MjModel fields that only describe appearance: writing them cannot change `mj_forward`.
 
-MuJoCo documents a colour (``rgba``), a material reference (``matid``) and a material's
+MuJoCo documents a colour (`rgba`), a material reference (`matid`) and a material's
 properties (emission, specular, shininess, reflectance, metallic, roughness and its texture
 reference and tiling) as visual properties, read by the renderer. The fields are found in
 the installed MuJoCo by those property names: every MjModel array named
-``<object>_<property>``, for whichever objects carry them.
+`<object>_<property>`, for whichever objects carry them.
 
-Two things can read them during ``mj_forward`` all the same, so a model that has either
+Two things can read them during `mj_forward` all the same, so a model that has either
 gets no exemptions:
 
 - ray casting skips fully transparent geoms, so a rangefinder's reading depends on geom and
   material colours;
 - user sensors and plugins run user code, which may read any field.
 
-``tests/mjcf/test_appearance.py`` checks, for the installed MuJoCo and every field listed
-here, that perturbing it leaves every MjData array after ``mj_forward`` bit-identical, and
+`tests/mjcf/test_appearance.py` checks, for the installed MuJoCo and every field listed
+here, that perturbing it leaves every MjData array after `mj_forward` bit-identical, and
 that a rangefinder does see a geom's colour.
 """
 
@@ -53,9 +53,9 @@ _SENSORS_READING_APPEARANCE = frozenset(
 
 
 def forward_neutral_fields(model: mujoco.MjModel) -> frozenset[str]:
-    """The MjModel fields of ``model`` whose values ``mj_forward`` does not read.
+    """The MjModel fields of `model` whose values `mj_forward` does not read.
 
-    ``APPEARANCE_FIELDS``, or no field at all when ``model`` has plugins, user sensors or
+    `APPEARANCE_FIELDS`, or no field at all when `model` has plugins, user sensors or
     rangefinders (see the module docstring).
     """
     if model.nplugin or not _SENSORS_READING_APPEARANCE.isdisjoint(model.sensor_type.tolist()):

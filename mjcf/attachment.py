@@ -11,7 +11,7 @@ from mjcf import constants
 from mjcf.element import AttachmentFrame, Element, RootElement
 from mjcf.option_merging import MERGED_OPTIONS
 
-# `AttachmentFrame` lives in `mjcf.element`, which recognises frames by their type.
+# `AttachmentFrame` lives in `mjcf.element`, next to the `Element` methods it overrides.
 __all__ = ["AttachmentFrame", "attach", "global_options"]
 
 _ATTACHABLE_TAGS = ("site", "body", "worldbody")

@@ -6,7 +6,7 @@ import numpy as np
 
 from mjcf import constants
 from mjcf.attribute_array import frozen
-from mjcf.element import Element, RootElement, registry_namespace
+from mjcf.element import AttachmentFrame, Element, RootElement, registry_namespace
 from mjcf.option_merging import MERGED_OPTIONS
 
 
@@ -16,8 +16,6 @@ def copy_model(source: RootElement) -> RootElement:
     References between elements of the copied models point into the copy; the copy is not
     attached to anything, even when `source` is.
     """
-    from mjcf.attachment import AttachmentFrame
-
     memo: dict[int, Element] = {}
     copies: list[Element] = []
 

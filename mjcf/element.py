@@ -5,7 +5,9 @@ from __future__ import annotations
 import difflib
 import os
 
+import mujoco
 import numpy as np
+from lxml import etree
 
 from mjcf import (
     attribute_array,
@@ -102,7 +104,8 @@ class Element:
         "__weakref__",
     )
 
-    # Whether this element is an attachment frame, whose joints are named after it.
+    # Attributes that `is_same_as` ignores.
+    _UNCOMPARED_ATTRIBUTES: frozenset[str] = frozenset()
 
     def __init__(self, *args, **kwargs):
         raise TypeError(
@@ -183,19 +186,22 @@ class Element:
             return prefix + self._attributes["class"]
         name = self._attributes.get("name")
         if name is not None:
-            parent = self._parent
-            if isinstance(parent, AttachmentFrame):
-                return parent._scoped_name(prefix) + name + _SEP
-            return prefix + name
+            return self._parent._child_name(prefix, name)
         return self._generated_name(prefix)
+
+    def _child_name(self, prefix: str, name: str) -> str:
+        """The scoped name of this element's child named `name` when the prefix is `prefix`."""
+        return prefix + name
 
     def _generated_name(self, prefix: str) -> str:
         """The name written for this unnamed element when its model's prefix is `prefix`."""
-        if self._spec.namespace == constants.JOINT:
-            parent = self._parent
-            if isinstance(parent, AttachmentFrame) and parent.unnamed_joint() is self:
-                return prefix + parent._attached._namescope.name + _SEP
-        return (prefix or _SEP) + self._unnamed_id()
+        parent = self._parent
+        name = parent._unnamed_child_name(self, prefix) if parent is not None else None
+        return name if name is not None else (prefix or _SEP) + self._unnamed_id()
+
+    def _unnamed_child_name(self, child: Element, prefix: str) -> str | None:
+        """The name this element gives its unnamed `child`, or None: the child's own id."""
+        return None
 
     def _unnamed_id(self) -> str:
         auto_id = self._auto_id
@@ -215,8 +221,6 @@ class Element:
 
     def __str__(self) -> str:
         """The opening tag with attributes; children are elided as '...'."""
-        from mjcf import xml_writer
-
         return xml_writer.short_string(self)
 
     # ------------------------------------------------------------------------ attributes
@@ -335,8 +339,6 @@ class Element:
         spec = self._spec.python_attributes.get(attribute_name)
         if spec is None:
             raise AttributeError(self._unknown_message(attribute_name))
-        from mjcf import xml_writer
-
         return xml_writer.attribute_string(self, spec, prefix_root)
 
     def _set_attribute(self, name: str, value) -> None:
@@ -529,8 +531,10 @@ class Element:
         """
         namespace = registry_namespace(self._spec)
         parent = self._parent
-        if isinstance(parent, AttachmentFrame):
-            return f"{namespace}{constants.NAMESPACE_SEPARATOR}frame{id(parent)}"
+        return parent._child_namespace(namespace) if parent is not None else namespace
+
+    def _child_namespace(self, namespace: str | None) -> str | None:
+        """The namespace a child registers an identifier of `namespace` under."""
         return namespace
 
     def _register_identifiers(self) -> None:
@@ -625,15 +629,16 @@ class Element:
                 element._root._namescope.remove(*entry)
             if element._auto_id is not None:
                 element._root._namescope.remove_unnamed(element._spec.namespace, element._auto_id)
-            if isinstance(element, AttachmentFrame):
-                element._root._frames.remove(element)
-                element._attached._frame = None
+            element._unlink()
             element._removed = True
         self._root._namescope.naming_changed()
         if self._spec.holds_files:
             self._files_changed()
         parent._children.remove(self)
         parent._changed()
+
+    def _unlink(self) -> None:
+        """Undoes what links this element to other models, as it is taken out of its own."""
 
     def get_children(self, element_name: str):
         """Children with the given tag: a list view for repeated tags, else the one child."""
@@ -653,17 +658,24 @@ class Element:
         attachment frame the elements of its attached model's worldbody.
         """
         children = list(self._children)
-        root = self._root
-        if (
-            self._parent is root
-            and root._frames
-            and self._spec.name not in (constants.WORLDBODY, constants.DEFAULT)
-        ):
-            for frame in root._frames:
-                section = frame._attached._singleton_if_present(self._spec.name)
-                if section is not None:
-                    children += [c for c in section.all_children() if c._spec.repeated]
+        for section in self._attached_sections():
+            children += [c for c in section.all_children() if c._spec.repeated]
         return children
+
+    def _attached_sections(self) -> list[Element]:
+        """The elements of attached models whose repeated children this element lists as its
+        own (see `all_children`): for a top-level section other than worldbody and default,
+        the same section of each attached model."""
+        root = self._root
+        tag = self._spec.name
+        if (
+            self._parent is not root
+            or not root._frames
+            or tag in (constants.WORLDBODY, constants.DEFAULT)
+        ):
+            return []
+        sections = (frame._attached._singleton_if_present(tag) for frame in root._frames)
+        return [section for section in sections if section is not None]
 
     # ------------------------------------------------------------------------ sameness
 
@@ -679,11 +691,7 @@ class Element:
         """
         if not isinstance(other, Element) or other._spec is not self._spec:
             return False
-        if not self._same_attributes(other):
-            return False
-        if isinstance(self, AttachmentFrame) and not (
-            isinstance(other, AttachmentFrame) and self._attached.is_same_as(other._attached)
-        ):
+        if not self._same_attributes(other) or not self._same_attachment(other):
             return False
         mine = [c for c in self._children if _is_set(c)]
         theirs = [c for c in other._children if _is_set(c)]
@@ -702,10 +710,13 @@ class Element:
                 return False
         return True
 
+    def _same_attachment(self, other: Element) -> bool:
+        """Whether `other` carries an equivalent attached model (both carry none here)."""
+        return True
+
     def _same_attributes(self, other: Element) -> bool:
         names = set(self._attributes) | set(other._attributes)
-        if isinstance(self, RootElement):
-            names.discard("model")
+        names.difference_update(self._UNCOMPARED_ATTRIBUTES)
         for name in names:
             mine = _comparable(self._attributes.get(name))
             theirs = _comparable(other._attributes.get(name))
@@ -763,7 +774,7 @@ class Element:
         found = []
         if immediate_children_only:
             for child in self._children:
-                if _matches(child, namespace):
+                if child._listed_under(namespace):
                     found.append(child)
             return found
         self._collect_children(namespace, exclude_attachments, found)
@@ -777,13 +788,17 @@ class Element:
         return found
 
     def _collect(self, namespace, exclude_attachments, found) -> None:
-        if _matches(self, namespace):
+        if self._listed_under(namespace):
             found.append(self)
         self._collect_children(namespace, exclude_attachments, found)
 
     def _collect_children(self, namespace, exclude_attachments, found) -> None:
         for child in self._children:
             child._collect(namespace, exclude_attachments, found)
+
+    def _listed_under(self, namespace: str) -> bool:
+        """Whether `find_all(namespace)` lists this element."""
+        return registry_namespace(self._spec) == namespace
 
     # --------------------------------------------------------------------- bookkeeping
 
@@ -838,8 +853,6 @@ class Element:
           self_close: write empty elements as `<tag/>` rather than `<tag></tag>`.
         """
         del debug_context
-        from mjcf import xml_writer
-
         if self_only:
             text = xml_writer.short_string(self, prefix_root)
             return text + "\n" if pretty_print else text
@@ -849,8 +862,6 @@ class Element:
 
     def to_xml(self, prefix_root=None, debug_context=None, *, precision=17, zero_threshold=0):
         """This element as an lxml element tree."""
-        from lxml import etree
-
         text = self.to_xml_string(
             prefix_root,
             pretty_print=False,
@@ -864,9 +875,7 @@ class Element:
 
     def attach(self, attachment: RootElement):
         """Attaches model `attachment` here (a site, body or worldbody); returns its frame."""
-        from mjcf import attachment as _attachment
-
-        return _attachment.attach(self, attachment)
+        return attachment_module.attach(self, attachment)
 
     def __copy__(self):
         raise TypeError(
@@ -907,12 +916,6 @@ def _frame_of(element):
     return None
 
 
-def _matches(element: Element, namespace: str) -> bool:
-    if namespace == constants.ATTACHMENT_FRAME:
-        return isinstance(element, AttachmentFrame)
-    return registry_namespace(element._spec) == namespace
-
-
 _FRAME_CHILDREN = ("joint", "freejoint", "inertial")
 _HINGED = ("joint", "inertial")
 
@@ -938,14 +941,36 @@ class AttachmentFrame(Element):
         allowed = _FRAME_CHILDREN if self._parent._spec.name == constants.WORLDBODY else _HINGED
         return {tag: children[tag] for tag in allowed if tag in children}
 
-    def all_children(self) -> list[Element]:
-        """The frame's own children, then the elements of the attached model's worldbody."""
+    def _attached_sections(self) -> list[Element]:
+        """The attached model's worldbody, whose elements the frame lists after its own."""
         world = self._attached._singleton_if_present(constants.WORLDBODY)
-        attached = world.all_children() if world is not None else []
-        return list(self._children) + [c for c in attached if c._spec.repeated]
+        return [world] if world is not None else []
 
     def _scoped_name(self, prefix: str) -> str:
         return prefix + self._attached._namescope.name + constants.PREFIX_SEPARATOR
+
+    def _child_name(self, prefix: str, name: str) -> str:
+        # A frame's joints are named after the frame: 'arm/' + 'x' + '/'.
+        return self._scoped_name(prefix) + name + _SEP
+
+    def _unnamed_child_name(self, child: Element, prefix: str) -> str | None:
+        if child._spec.namespace == constants.JOINT and child is self.unnamed_joint():
+            return self._scoped_name(prefix)
+        return None
+
+    def _child_namespace(self, namespace: str | None) -> str | None:
+        # The frame's joint names only need to be unique per frame: each has its own namespace.
+        return f"{namespace}{constants.NAMESPACE_SEPARATOR}frame{id(self)}"
+
+    def _unlink(self) -> None:
+        self._root._frames.remove(self)
+        self._attached._frame = None
+
+    def _same_attachment(self, other: Element) -> bool:
+        return isinstance(other, AttachmentFrame) and self._attached.is_same_as(other._attached)
+
+    def _listed_under(self, namespace: str) -> bool:
+        return namespace == constants.ATTACHMENT_FRAME or super()._listed_under(namespace)
 
     def unnamed_joint(self) -> Element | None:
         """The first unnamed joint or freejoint of this frame, which is named after the frame
@@ -998,6 +1023,9 @@ class RootElement(Element):
         "_xml_string_cache",
         "_assets_cache",
     )
+
+    # A model's own name does not make it differ from another.
+    _UNCOMPARED_ATTRIBUTES = frozenset(("model",))
 
     def __init__(self, model: str | None = None, model_dir: str = "", assets: dict | None = None):
         self._spec = schema.root_spec()
@@ -1104,16 +1132,12 @@ class RootElement(Element):
         """Every file asset of this model and attached models: VFS filename -> contents."""
         cache = self._assets_cache
         if cache is None or cache[0] != self._files_count:
-            from mjcf import xml_writer
-
             cache = (self._files_count, xml_writer.collect_assets(self))
             self._assets_cache = cache
         return dict(cache[1])
 
     def to_spec(self):
         """This model as a `mujoco.MjSpec` (compiled names equal `full_identifier`s)."""
-        import mujoco
-
         return mujoco.MjSpec.from_string(self.to_xml_string(), assets=self.get_assets())
 
     def remove(self, affect_attachments: bool = False) -> None:
@@ -1122,24 +1146,18 @@ class RootElement(Element):
     def include_copy(self, other: RootElement, override_attributes: bool = False) -> None:
         """Copies the contents of model `other` into this model (see
         `mjcf.copier.include_copy`)."""
-        from mjcf import copier
-
         copier.include_copy(self, other, override_attributes)
 
     def resolve_references(self) -> None:
         """Replaces identifier strings in reference attributes (an actuator's `joint`, a
         geom's `material`) by the elements they name, where this model has such an element.
         """
-        from mjcf import parser
-
         parser.resolve_reference_strings(self)
 
     def __copy__(self):
         return self.__deepcopy__({})
 
     def __deepcopy__(self, memo):
-        from mjcf import copier
-
         return copier.copy_model(self)
 
 
@@ -1150,3 +1168,10 @@ _CLASS_ATTRIBUTES = frozenset(
     for name, value in vars(cls).items()
     if isinstance(value, property)
 )
+
+
+# These modules implement what the element classes' methods delegate to (XML writing,
+# `attach`, copying, reference resolution), and they build and inspect elements, so they
+# import the classes above: imported last, they find them defined whichever is imported first.
+from mjcf import attachment as attachment_module  # noqa: E402
+from mjcf import copier, parser, xml_writer  # noqa: E402

@@ -4,12 +4,7 @@ from __future__ import annotations
 
 from typing import TYPE_CHECKING
 
-from mjcf import element as element_module
-from mjcf.constants import DEFAULT, PREFIX_SEPARATOR, WORLDBODY
-
-# Top-level sections that list only their own model's elements: attached models' bodies hang
-# below attachment frames, and their default classes are scoped separately.
-_OWN_ONLY = (WORLDBODY, DEFAULT)
+from mjcf.constants import PREFIX_SEPARATOR
 
 if TYPE_CHECKING:
     from mjcf.element import Element
@@ -45,20 +40,10 @@ class ElementList:
         """(model name, same view in that model) for each model whose elements this view
         lists too: an attachment frame lists its model's worldbody children, a top-level
         section (`root.actuator`) the same section of each attached model."""
-        parent = self._parent
-        if isinstance(parent, element_module.AttachmentFrame):
-            sources = [(parent._attached, WORLDBODY)]
-        else:
-            root = parent._root
-            if parent._parent is not root or not root._frames or parent._spec.name in _OWN_ONLY:
-                return []
-            sources = [(frame._attached, parent._spec.name) for frame in root._frames]
-        views = []
-        for model, tag in sources:
-            section = model._singleton_if_present(tag)
-            if section is not None:
-                views.append((model._namescope.name, ElementList(section, self._tag)))
-        return views
+        return [
+            (section._root._namescope.name, ElementList(section, self._tag))
+            for section in self._parent._attached_sections()
+        ]
 
     def __getitem__(self, index):
         if isinstance(index, str):

@@ -38,8 +38,7 @@ import sys
 
 from mjcf import attribute_types, constants, schema, scoped_lookup, skin_file
 from mjcf.asset import Asset
-from mjcf.attachment import AttachmentFrame
-from mjcf.element import Element, RootElement
+from mjcf.element import AttachmentFrame, Element, RootElement
 from mjcf.option_merging import MERGED_OPTIONS
 
 _SEP = constants.PREFIX_SEPARATOR

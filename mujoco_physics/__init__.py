@@ -1,11 +1,11 @@
-"""The engine layer: dm_control's ``dm_control.mujoco`` on the official MuJoCo bindings.
+"""The engine layer: dm_control's `dm_control.mujoco` on the official MuJoCo bindings.
 
-`import mujoco_physics` replaces `from dm_control import mujoco`: ``Physics`` (built from XML,
-a binary or a model, with ``named`` indexing, ``reset_context``, ``render``, ...),
-``action_spec``, the ``wrapper`` structs and ``mjbindings`` aliases, ``index`` and ``math``.
-It knows nothing of MJCF elements; ``mjcf.Physics`` builds on it. It cannot be named
-``mujoco``, which is the official bindings it wraps. As in dm_control, the ``mujoco``
-module's own names are available here too (``mujoco_physics.mj_step``).
+`import mujoco_physics` replaces `from dm_control import mujoco`: `Physics` (built from XML,
+a binary or a model, with `named` indexing, `reset_context`, `render`, ...),
+`action_spec`, the `wrapper` structs and `mjbindings` aliases, `index` and `math`.
+It knows nothing of MJCF elements; `mjcf.Physics` builds on it. It cannot be named
+`mujoco`, which is the official bindings it wraps. As in dm_control, the `mujoco`
+module's own names are available here too (`mujoco_physics.mj_step`).
 """
 
 from mujoco_physics import version

@@ -1,8 +1,8 @@
-"""dm_control's cameras on a Physics: ``Camera`` (a fixed or free camera that renders, projects
-and selects), ``MovableCamera`` (a free camera with a pose) and ``TextOverlay``.
+"""dm_control's cameras on a Physics: `Camera` (a fixed or free camera that renders, projects
+and selects), `MovableCamera` (a free camera with a pose) and `TextOverlay`.
 
-Each camera owns a ``mujoco.Renderer`` of its image size (its own OpenGL context), so its
-scene, options and flags persist between renders, as in dm_control. ``Physics.render`` uses a
+Each camera owns a `mujoco.Renderer` of its image size (its own OpenGL context), so its
+scene, options and flags persist between renders, as in dm_control. `Physics.render` uses a
 camera for what its per-size renderers cannot do (text overlays, scene callbacks).
 """
 
@@ -38,7 +38,7 @@ _POSITIONS = {
 
 
 class CameraMatrices(NamedTuple):
-    """The factors of a camera's 3x4 projection ``image @ focal @ rotation @ translation``,
+    """The factors of a camera's 3x4 projection `image @ focal @ rotation @ translation`,
     which maps homogeneous world points to homogeneous pixel coordinates (x right, y down).
 
     Attributes:
@@ -100,7 +100,7 @@ class TextOverlay:
         self.position = _POSITIONS[position]
 
     def draw(self, context: mujoco.MjrContext, rect: mujoco.MjrRect) -> None:
-        """Draws the text into ``rect`` of the current framebuffer."""
+        """Draws the text into `rect` of the current framebuffer."""
         mujoco.mjr_overlay(self.style, self.position, rect, self.title, self.body, context)
 
 
@@ -112,7 +112,7 @@ class Camera:
       height, width: image size in pixels, at most the model's offscreen buffer.
       camera_id: a camera's index or name; -1 is the free camera.
       max_geom: how many geoms the scene holds (default: enough for the model).
-      scene_callback: called as ``scene_callback(physics, scene)`` after each scene update,
+      scene_callback: called as `scene_callback(physics, scene)` after each scene update,
         before rendering, e.g. to add geoms.
 
     Raises:
@@ -161,7 +161,7 @@ class Camera:
 
     @property
     def scene(self) -> mujoco.MjvScene:
-        """The scene; its ``flags`` (wireframe, shadows, ...) persist between renders."""
+        """The scene; its `flags` (wireframe, shadows, ...) persist between renders."""
         return self._renderer.scene
 
     def update(self, scene_option: mujoco.MjvOption | None = None) -> None:
@@ -181,7 +181,7 @@ class Camera:
 
     def matrices(self) -> CameraMatrices:
         """The factors of the camera's projection at the current state (see
-        ``CameraMatrices``)."""
+        `CameraMatrices`)."""
         self.update()
         eyes = self.scene.camera
         position = (eyes[0].pos + eyes[1].pos) / 2
@@ -210,7 +210,7 @@ class Camera:
         scene_option: mujoco.MjvOption | None = None,
         render_flag_overrides: dict | None = None,
     ) -> np.ndarray:
-        """Renders the camera's view (see ``Physics.render`` for the arguments and shapes).
+        """Renders the camera's view (see `Physics.render` for the arguments and shapes).
 
         Raises:
           ValueError: for depth with segmentation, or overlays or flag overrides with
@@ -246,7 +246,7 @@ class Camera:
         return np.flipud(pixels)
 
     def select(self, cursor_position: Sequence[float]) -> Selected:
-        """What the ray through ``cursor_position`` hits first.
+        """What the ray through `cursor_position` hits first.
 
         Args:
           cursor_position: (x, y) in [0, 1], from the image's bottom-left corner.
@@ -280,7 +280,7 @@ class Camera:
 
 
 class MovableCamera(Camera):
-    """A free camera whose pose can be read and set (see ``Pose``)."""
+    """A free camera whose pose can be read and set (see `Pose`)."""
 
     def __init__(
         self, physics: Physics, height: int = 240, width: int = 320, max_geom: int | None = None
@@ -293,8 +293,8 @@ class MovableCamera(Camera):
         return Pose(camera.lookat.copy(), camera.distance, camera.azimuth, camera.elevation)
 
     def set_pose(self, lookat, distance: float, azimuth: float, elevation: float) -> None:
-        """Points the camera at ``lookat`` from ``distance`` m, at ``azimuth`` and
-        ``elevation`` degrees."""
+        """Points the camera at `lookat` from `distance` m, at `azimuth` and
+        `elevation` degrees."""
         camera = self._camera
         np.copyto(camera.lookat, lookat)
         camera.distance = distance

@@ -1,9 +1,9 @@
-"""``Physics``: a compiled MuJoCo model and its simulation state, as dm_control's
-``dm_control.mujoco.Physics`` (which this module serves through the redirect).
+"""`Physics`: a compiled MuJoCo model and its simulation state, as dm_control's
+`dm_control.mujoco.Physics` (which this module serves through the redirect).
 
 This is the engine layer: it knows MuJoCo models and data, named indexing and rendering,
-and nothing of MJCF elements. ``mjcf.Physics`` builds on it and adds ``bind`` and the
-constructors from an ``mjcf.RootElement``.
+and nothing of MJCF elements. `mjcf.Physics` builds on it and adds `bind` and the
+constructors from an `mjcf.RootElement`.
 """
 
 import contextlib
@@ -70,14 +70,14 @@ if mujoco.get_mju_user_warning() is None:
 class PhysicsError(RuntimeError):
     """Raised when the simulation diverges (MuJoCo warnings such as bad qacc).
 
-    Under the dm_control redirect, ``dm_control.rl.control.PhysicsError`` is this class.
+    Under the dm_control redirect, `dm_control.rl.control.PhysicsError` is this class.
     """
 
 
 class _Simulation:
     """Model, data and the warning flags shared by a Physics and what it hands out.
 
-    Kept apart from ``Physics`` so that helpers (``mjcf`` bindings) can run ``forward()``
+    Kept apart from `Physics` so that helpers (`mjcf` bindings) can run `forward()`
     without holding a reference to the Physics (no cycle keeps a discarded one alive).
     """
 
@@ -99,7 +99,7 @@ class _Simulation:
             self.report_warnings(before)
 
     def report_warnings(self, before: bytes) -> None:
-        """Raises PhysicsError (or logs) for warning counters that grew since ``before``."""
+        """Raises PhysicsError (or logs) for warning counters that grew since `before`."""
         previous = np.frombuffer(before, dtype=self.warnings.dtype)
         raised = [name for name, grew in zip(_WARNING_NAMES, self.warnings > previous) if grew]
         if not raised:
@@ -113,18 +113,18 @@ class _Simulation:
 class Physics:
     """A compiled MuJoCo model with its simulation data, API-compatible with dm_control.
 
-    Construct it with ``from_xml_string``, ``from_xml_path``, ``from_binary_path``,
-    ``from_byte_string`` or ``from_model``. ``model`` and ``data`` expose every
-    MjModel/MjData field as NumPy views (``.ptr`` gives the raw ``mujoco`` objects);
-    ``named`` indexes fields by object name (``named.data.qpos['hinge']``).
+    Construct it with `from_xml_string`, `from_xml_path`, `from_binary_path`,
+    `from_byte_string` or `from_model`. `model` and `data` expose every
+    MjModel/MjData field as NumPy views (`.ptr` gives the raw `mujoco` objects);
+    `named` indexes fields by object name (`named.data.qpos['hinge']`).
 
-    ``step(nstep)`` advances the simulation. With ``legacy_step`` True (the default) it runs
-    ``mj_step2``, then ``mj_step(nstep - 1)``, then ``mj_step1``, so position- and
+    `step(nstep)` advances the simulation. With `legacy_step` True (the default) it runs
+    `mj_step2`, then `mj_step(nstep - 1)`, then `mj_step1`, so position- and
     velocity-dependent quantities (xpos, sensordata of position sensors, ...) describe the
-    state after the step; with RK4 it runs ``mj_step(nstep)`` then ``mj_step1``. With
-    ``legacy_step`` False it runs ``mj_step(nstep)``. ``step(k)`` equals ``k`` calls to
-    ``step()``. Any method that runs MuJoCo raises ``PhysicsError`` when MuJoCo reports a
-    divergence warning during it, unless inside ``suppress_physics_errors()``.
+    state after the step; with RK4 it runs `mj_step(nstep)` then `mj_step1`. With
+    `legacy_step` False it runs `mj_step(nstep)`. `step(k)` equals `k` calls to
+    `step()`. Any method that runs MuJoCo raises `PhysicsError` when MuJoCo reports a
+    divergence warning during it, unless inside `suppress_physics_errors()`.
 
     Example:
         >>> physics = Physics.from_xml_string(
@@ -138,19 +138,19 @@ class Physics:
     legacy_step = True
 
     def __init__(self, data: MjData | mujoco.MjData):
-        """Wraps ``data`` (a ``mujoco.MjData`` or a ``wrapper.MjData``) and runs forward.
+        """Wraps `data` (a `mujoco.MjData` or a `wrapper.MjData`) and runs forward.
 
         A divergence warning from that first forward is logged, not raised (the state is
         about to be set).
 
         Raises:
           PhysicsError: naming the model, when MuJoCo aborts that first forward
-            (``mujoco.FatalError``, e.g. arena memory exhausted on some releases).
+            (`mujoco.FatalError`, e.g. arena memory exhausted on some releases).
         """
         self._reload_from_data(data)
 
     def _reload_from_data(self, data: MjData | mujoco.MjData) -> None:
-        """(Re)builds this Physics around ``data`` and runs forward.
+        """(Re)builds this Physics around `data` and runs forward.
 
         Every constructor and reload ends here, so a subclass that keeps derived state (as
         dm_control's suite domains do) overrides this method and calls it first.
@@ -172,7 +172,7 @@ class Physics:
             ) from error
 
     def _reload_from_model(self, model: MjModel | mujoco.MjModel) -> None:
-        """(Re)builds this Physics with fresh data for ``model``."""
+        """(Re)builds this Physics with fresh data for `model`."""
         self._reload_from_data(mujoco.MjData(getattr(model, "ptr", model)))
 
     _renderers = None
@@ -196,17 +196,17 @@ class Physics:
 
     @classmethod
     def from_model(cls, model: MjModel | mujoco.MjModel) -> "Physics":
-        """A Physics with fresh data for ``model`` (a ``mujoco.MjModel`` or wrapper.MjModel)."""
+        """A Physics with fresh data for `model` (a `mujoco.MjModel` or wrapper.MjModel)."""
         return cls(mujoco.MjData(getattr(model, "ptr", model)))
 
     @classmethod
     def from_xml_string(cls, xml_string: str, assets: dict | None = None) -> "Physics":
-        """Compiles an MJCF string; ``assets`` maps file names used in it to their bytes."""
+        """Compiles an MJCF string; `assets` maps file names used in it to their bytes."""
         return cls.from_model(MjModel.from_xml_string(xml_string, assets=assets))
 
     @classmethod
     def from_xml_path(cls, file_path: str) -> "Physics":
-        """Compiles the MJCF file at ``file_path``."""
+        """Compiles the MJCF file at `file_path`."""
         return cls.from_model(MjModel.from_xml_path(file_path))
 
     @classmethod
@@ -216,31 +216,31 @@ class Physics:
 
     @classmethod
     def from_byte_string(cls, byte_string: bytes) -> "Physics":
-        """Loads a compiled model from MJB bytes (what ``mujoco.mj_saveModel`` writes).
+        """Loads a compiled model from MJB bytes (what `mujoco.mj_saveModel` writes).
 
         Raises:
-          ValueError: if ``byte_string`` is not a MuJoCo model binary.
+          ValueError: if `byte_string` is not a MuJoCo model binary.
         """
         return cls.from_model(MjModel.from_byte_string(byte_string))
 
     def reload_from_xml_string(self, xml_string: str, assets: dict | None = None) -> None:
-        """Recompiles this Physics from MJCF text, as ``from_xml_string`` would."""
+        """Recompiles this Physics from MJCF text, as `from_xml_string` would."""
         self._reload_from_model(MjModel.from_xml_string(xml_string, assets=assets))
 
     def reload_from_xml_path(self, file_path: str) -> None:
-        """Recompiles this Physics from the MJCF file at ``file_path``."""
+        """Recompiles this Physics from the MJCF file at `file_path`."""
         self._reload_from_model(MjModel.from_xml_path(file_path))
 
     # Structures.
 
     @property
     def model(self) -> MjModel:
-        """The MjModel; ``physics.model.ptr`` is the ``mujoco.MjModel``."""
+        """The MjModel; `physics.model.ptr` is the `mujoco.MjModel`."""
         return self._model
 
     @property
     def data(self) -> MjData:
-        """The MjData; ``physics.data.ptr`` is the ``mujoco.MjData``."""
+        """The MjData; `physics.data.ptr` is the `mujoco.MjData`."""
         return self._data
 
     @property
@@ -251,7 +251,7 @@ class Physics:
 
     @property
     def named(self) -> index.NamedIndexStructs:
-        """``named.model.<field>[name]`` and ``named.data.<field>[name]`` access."""
+        """`named.model.<field>[name]` and `named.data.<field>[name]` access."""
         if self._named is None:
             self._named = index.make_struct_indexers(self._sim.model, self._sim.data, self._layout)
         return self._named
@@ -259,7 +259,7 @@ class Physics:
     # Simulation.
 
     def step(self, nstep: int = 1) -> None:
-        """Advances the simulation by ``nstep`` timesteps (see the class docstring)."""
+        """Advances the simulation by `nstep` timesteps (see the class docstring)."""
         sim = self._sim
         model, data = sim.model, sim.data
         before = sim.warnings.tobytes()
@@ -277,15 +277,15 @@ class Physics:
             sim.report_warnings(before)
 
     def forward(self) -> None:
-        """Recomputes every derived quantity from the state (``mj_forward``)."""
+        """Recomputes every derived quantity from the state (`mj_forward`)."""
         self._sim.forward()
 
     def reset(self, keyframe_id: int | None = None) -> None:
-        """Resets the data to the model defaults, or to keyframe ``keyframe_id``, then
+        """Resets the data to the model defaults, or to keyframe `keyframe_id`, then
         runs forward with actuation disabled.
 
         Raises:
-          ValueError: if ``keyframe_id`` is not in [0, nkey).
+          ValueError: if `keyframe_id` is not in [0, nkey).
         """
         sim = self._sim
         if keyframe_id is None:
@@ -340,7 +340,7 @@ class Physics:
             sim.raise_on_warnings = previous
 
     def enable_profiling(self) -> None:
-        """Turns on MuJoCo's timers (``data.timer``), as ``wrapper.enable_timer(True)``."""
+        """Turns on MuJoCo's timers (`data.timer`), as `wrapper.enable_timer(True)`."""
         enable_timer(True)
 
     # State and controls.
@@ -358,7 +358,7 @@ class Physics:
         return self._ctrl.copy()
 
     def set_control(self, control) -> None:
-        """Sets the actuator controls (``nu`` values)."""
+        """Sets the actuator controls (`nu` values)."""
         np.copyto(self._ctrl, control)
 
     def activation(self) -> np.ndarray:
@@ -377,7 +377,7 @@ class Physics:
         """The physics state as one flat array.
 
         Args:
-          sig: an ``mjtState`` bit mask for ``mj_getState``; by default qpos, qvel and act
+          sig: an `mjtState` bit mask for `mj_getState`; by default qpos, qvel and act
             (plus actuator history and plugin state where the model has them).
         """
         signature, size = self._state_layout(sig)
@@ -386,28 +386,28 @@ class Physics:
         return state
 
     def _state_layout(self, sig: int | None) -> tuple[int, int]:
-        """The ``mjtState`` signature ``sig`` stands for (the default one for None) and
+        """The `mjtState` signature `sig` stands for (the default one for None) and
         the size of its state."""
         if sig is None:
             return self._state_signature, self._state_size
         return int(sig), mujoco.mj_stateSize(self._sim.model, int(sig))
 
     def _physics_state_items(self) -> list[np.ndarray]:
-        """The MjData arrays that ``get_state()`` concatenates: qpos, qvel, act, then actuator
+        """The MjData arrays that `get_state()` concatenates: qpos, qvel, act, then actuator
         history, plugin state and plasticity where the model has them."""
         data = self._sim.data
         arrays = [getattr(data, name, None) for name in _STATE_ARRAYS]
         return arrays[:3] + [a for a in arrays[3:] if a is not None and a.size]
 
     def state(self) -> np.ndarray:
-        """Same as ``get_state()``."""
+        """Same as `get_state()`."""
         return self.get_state()
 
     def set_state(self, physics_state, sig: int | None = None) -> None:
-        """Restores a state returned by ``get_state(sig)``.
+        """Restores a state returned by `get_state(sig)`.
 
         Raises:
-          ValueError: if ``physics_state`` does not have the state's shape.
+          ValueError: if `physics_state` does not have the state's shape.
         """
         signature, size = self._state_layout(sig)
         state = np.asarray(physics_state, dtype=np.float64)
@@ -420,7 +420,7 @@ class Physics:
     # Copies and resources.
 
     def copy(self, share_model: bool = False) -> "Physics":
-        """A new Physics with a copy of this data; the model is copied unless ``share_model``."""
+        """A new Physics with a copy of this data; the model is copied unless `share_model`."""
         # MjData's copy shares its model; its deep copy copies the model too.
         copier = copy_module.copy if share_model else copy_module.deepcopy
         new = self.__class__.__new__(self.__class__)
@@ -428,7 +428,7 @@ class Physics:
         return new
 
     def __getstate__(self) -> dict:
-        """What pickling (and ``copy.deepcopy``) keeps: model, data and the step mode;
+        """What pickling (and `copy.deepcopy`) keeps: model, data and the step mode;
         named indexers and renderers are rebuilt on use."""
         return {"data": self._sim.data, "legacy_step": self.legacy_step}
 
@@ -469,18 +469,18 @@ class Physics:
 
         Args:
           height, width: image size in pixels; at most the model's offscreen buffer size
-            (``<visual><global offheight offwidth>``).
+            (`<visual><global offheight offwidth>`).
           camera_id: camera index or name; -1 is the free camera.
-          overlays: ``TextOverlay``s drawn over an RGB image.
+          overlays: `TextOverlay`s drawn over an RGB image.
           depth: return depth in metres, (H, W) float32.
           segmentation: return (H, W, 2) int32 (object id, mjtObj type); -1 for background.
-          scene_option: an optional ``mujoco.MjvOption``.
+          scene_option: an optional `mujoco.MjvOption`.
           render_flag_overrides: optional {flag name or mjtRndFlag: bool} for RGB images.
-          scene_callback: optional ``f(physics, scene)`` called before rendering (to add
+          scene_callback: optional `f(physics, scene)` called before rendering (to add
             geoms to the scene, say).
 
         Returns:
-          (H, W, 3) uint8 RGB unless ``depth`` or ``segmentation``.
+          (H, W, 3) uint8 RGB unless `depth` or `segmentation`.
 
         Raises:
           ValueError: for an unknown camera, an image larger than the offscreen buffer,
@@ -513,8 +513,8 @@ _FREED_CLASSES: dict[type, type] = {}
 
 
 def _freed_class(cls: type) -> type:
-    """The class a freed instance of ``cls`` becomes (one per Physics subclass, so that
-    ``isinstance`` checks against the user's subclass still hold)."""
+    """The class a freed instance of `cls` becomes (one per Physics subclass, so that
+    `isinstance` checks against the user's subclass still hold)."""
     if cls not in _FREED_CLASSES:
         _FREED_CLASSES[cls] = type(f"Freed{cls.__name__}", (_Freed, cls), {})
     return _FREED_CLASSES[cls]
@@ -537,12 +537,12 @@ class _Freed:
 
 
 def action_spec(physics: Physics) -> specs.BoundedArray:
-    """The action spec of ``physics``'s actuators: one float64 per actuator, bounded by
-    ``actuator_ctrlrange`` where ``actuator_ctrllimited`` is set and by +-``mjMAXVAL``
+    """The action spec of `physics`'s actuators: one float64 per actuator, bounded by
+    `actuator_ctrlrange` where `actuator_ctrllimited` is set and by +-`mjMAXVAL`
     elsewhere.
 
     Returns:
-      A ``dm_env.specs.BoundedArray`` of shape ``(nu,)``.
+      A `dm_env.specs.BoundedArray` of shape `(nu,)`.
     """
     model = physics.model.ptr
     limited = model.actuator_ctrllimited.astype(bool)

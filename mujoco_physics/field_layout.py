@@ -1,10 +1,10 @@
 """Which MuJoCo object owns each row of an MjModel/MjData array.
 
-Everything here is derived from the array extents that the installed ``mujoco`` package
-publishes in ``mujoco.introspect`` (the X-macros of MuJoCo's C headers): an array whose first
-extent is an object count (``ngeom``, ``njnt``, ...) has one row per object of that family;
-arrays sized by ``nq``, ``nv``, ``nsensordata``, ``na``, ... are addressed through the
-per-object start/width arrays listed in ``_ADDRESSING``. A field MuJoCo adds in a new release
+Everything here is derived from the array extents that the installed `mujoco` package
+publishes in `mujoco.introspect` (the X-macros of MuJoCo's C headers): an array whose first
+extent is an object count (`ngeom`, `njnt`, ...) has one row per object of that family;
+arrays sized by `nq`, `nv`, `nsensordata`, `na`, ... are addressed through the
+per-object start/width arrays listed in `_ADDRESSING`. A field MuJoCo adds in a new release
 is picked up without a change here.
 """
 
@@ -37,9 +37,9 @@ class _Addressing:
     Attributes:
       family: namespace of the owning family.
       start: MjModel field holding each object's first row.
-      width: MjModel field holding each object's row count; ``NEXT_START`` when an object's
-        rows run up to the next object's first row; ``AT_MOST_ONE`` when an object owns one
-        row, or none where ``start`` is -1.
+      width: MjModel field holding each object's row count; `NEXT_START` when an object's
+        rows run up to the next object's first row; `AT_MOST_ONE` when an object owns one
+        row, or none where `start` is -1.
       ragged: whether a single object yields an array even when it owns one row.
       prefix: an extra field-name prefix stripped for bindings of this family.
     """
@@ -72,9 +72,9 @@ class FieldRef:
     """One MjModel/MjData array as seen from an object family.
 
     Attributes:
-      struct: ``MODEL`` or ``DATA``.
-      name: the MuJoCo field name (``geom_xpos``).
-      addressing: ``None`` when the field has one row per object, else how rows map.
+      struct: `MODEL` or `DATA`.
+      name: the MuJoCo field name (`geom_xpos`).
+      addressing: `None` when the field has one row per object, else how rows map.
     """
 
     struct: str
@@ -84,13 +84,13 @@ class FieldRef:
 
 @dataclasses.dataclass(frozen=True)
 class Family:
-    """A kind of named MuJoCo object (``geom``, ``joint``, ...) and its fields.
+    """A kind of named MuJoCo object (`geom`, `joint`, ...) and its fields.
 
     Attributes:
-      namespace: the MJCF namespace, equal to the lowercase ``mjtObj`` name.
-      obj_type: the ``mujoco.mjtObj`` value.
-      count: the extent symbol counting the family's objects (``ngeom``).
-      fields: binding attribute name (family prefix stripped) -> ``FieldRef``.
+      namespace: the MJCF namespace, equal to the lowercase `mjtObj` name.
+      obj_type: the `mujoco.mjtObj` value.
+      count: the extent symbol counting the family's objects (`ngeom`).
+      fields: binding attribute name (family prefix stripped) -> `FieldRef`.
     """
 
     namespace: str
@@ -133,7 +133,7 @@ STRUCT_EXTENTS = {MODEL: MODEL_EXTENTS, DATA: DATA_EXTENTS}
 
 
 def _abbreviates(word: str, name: str) -> bool:
-    """Whether ``word`` is ``name`` or an abbreviation of it ('jnt' of 'joint')."""
+    """Whether `word` is `name` or an abbreviation of it ('jnt' of 'joint')."""
     if not word or word[0] != name[0]:
         return False
     remaining = iter(name)
@@ -165,7 +165,7 @@ def _namespaces_by_short_name() -> dict:
 
 
 def _supported_addressings(namespace: str, count: str) -> dict:
-    """The ``_ADDRESSING`` rules of family ``namespace`` that this MuJoCo version has."""
+    """The `_ADDRESSING` rules of family `namespace` that this MuJoCo version has."""
     return {
         extent: rule
         for extent, rule in _ADDRESSING.items()
@@ -205,7 +205,7 @@ _ATTRIBUTE_PRECEDENCE = {(True, DATA): 0, (True, MODEL): 1, (False, DATA): 2, (F
 
 
 def _family_fields(namespace: str) -> dict:
-    """Binding attribute -> FieldRef for family ``namespace``, prefixes stripped.
+    """Binding attribute -> FieldRef for family `namespace`, prefixes stripped.
 
     A leading word is stripped when it abbreviates the namespace and prefixes the family's
     per-object fields ('jnt_', 'ten_'), or is the extra prefix of an addressing rule ('dof_').
@@ -232,7 +232,7 @@ def _family_fields(namespace: str) -> dict:
 
 
 def _build_families() -> dict:
-    """Namespace -> ``Family`` for every named MuJoCo object kind."""
+    """Namespace -> `Family` for every named MuJoCo object kind."""
     return {
         namespace: Family(
             namespace=namespace,
@@ -251,7 +251,7 @@ ROW_OWNERS = {key: (FAMILIES[namespace], rule) for key, (namespace, rule) in _RO
 
 
 def column_names(field: str, width: int) -> tuple | None:
-    """Labels for the trailing axis of ``field`` ('x', 'y', 'z' for positions), or None."""
+    """Labels for the trailing axis of `field` ('x', 'y', 'z' for positions), or None."""
     if width == 3:
         return _XYZ
     if width == 4 and "quat" in field:
@@ -264,7 +264,7 @@ def column_names(field: str, width: int) -> tuple | None:
 
 
 class ModelLayout:
-    """Row look-ups for one compiled ``mujoco.MjModel``: object ids, names and row indices."""
+    """Row look-ups for one compiled `mujoco.MjModel`: object ids, names and row indices."""
 
     def __init__(self, model: mujoco.MjModel):
         self._model = model
@@ -275,18 +275,18 @@ class ModelLayout:
         return self._model
 
     def object_id(self, family: Family, name: str) -> int:
-        """The id of the ``family`` object called ``name``, or -1 if there is none."""
+        """The id of the `family` object called `name`, or -1 if there is none."""
         return mujoco.mj_name2id(self._model, family.obj_type, name)
 
     def object_name(self, family: Family, object_id: int) -> str:
-        """The name of object ``object_id`` of ``family`` ('' when unnamed)."""
+        """The name of object `object_id` of `family` ('' when unnamed)."""
         return mujoco.mj_id2name(self._model, family.obj_type, object_id) or ""
 
     def object_count(self, family: Family) -> int:
         return int(getattr(self._model, family.count))
 
     def spans(self, rule: _Addressing) -> tuple:
-        """(first rows, row counts) of every object of ``rule.family``, as int arrays."""
+        """(first rows, row counts) of every object of `rule.family`, as int arrays."""
         spans = self._spans.get(rule)
         if spans is None:
             starts = np.asarray(getattr(self._model, rule.start), dtype=np.intp).ravel()
@@ -324,7 +324,7 @@ class ModelLayout:
         return offsets + np.arange(total, dtype=np.intp)
 
     def owned_rows(self, rule: _Addressing | None, object_id: int) -> int:
-        """How many rows of a field object ``object_id`` owns."""
+        """How many rows of a field object `object_id` owns."""
         if rule is None:
             return 1
         return int(self.spans(rule)[1][object_id])
@@ -335,7 +335,7 @@ def _extent_of(rule: _Addressing) -> str:
 
 
 def compress(index: np.ndarray):
-    """A basic slice equal to ``index`` when its rows are consecutive, else ``index``."""
+    """A basic slice equal to `index` when its rows are consecutive, else `index`."""
     if len(index) and index[-1] - index[0] == len(index) - 1:
         if len(index) == 1 or np.all(np.diff(index) == 1):
             return slice(int(index[0]), int(index[-1]) + 1)

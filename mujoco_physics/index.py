@@ -1,12 +1,12 @@
-"""``physics.named.model.<field>[name]`` and ``physics.named.data.<field>[name]``.
+"""`physics.named.model.<field>[name]` and `physics.named.data.<field>[name]`.
 
-Each MjModel/MjData array field gets a ``FieldIndexer`` on first access. Rows of fields
-that belong to an object family (``mujoco_physics.field_layout``) are addressed by the
-objects' names in the compiled model: ``named.data.xpos['torso']``,
-``named.model.geom_rgba[['a', 'b']]``,
-``named.data.qpos['free_joint']`` (7 values), ``named.data.sensordata['accelerometer']``.
+Each MjModel/MjData array field gets a `FieldIndexer` on first access. Rows of fields
+that belong to an object family (`mujoco_physics.field_layout`) are addressed by the
+objects' names in the compiled model: `named.data.xpos['torso']`,
+`named.model.geom_rgba[['a', 'b']]`,
+`named.data.qpos['free_joint']` (7 values), `named.data.sensordata['accelerometer']`.
 Integers, slices and arrays index rows directly, as in NumPy; a tuple key indexes rows then
-columns, and labelled columns accept names (``named.data.xpos['torso', 'z']``).
+columns, and labelled columns accept names (`named.data.xpos['torso', 'z']`).
 """
 
 import collections
@@ -19,15 +19,15 @@ from mujoco_physics.field_layout import ModelLayout
 NamedIndexStructs = collections.namedtuple("NamedIndexStructs", ["model", "data"])
 
 Axes = collections.namedtuple("Axes", ["row", "col"], defaults=[None])
-Axes.__doc__ = "The row and column axes of a field (``FieldIndexer.axes``); col is None for 1-D."
+Axes.__doc__ = "The row and column axes of a field (`FieldIndexer.axes`); col is None for 1-D."
 
 
 class Axis:
-    """One axis of a field: ``names`` lists the labels it accepts, or is None when unnamed.
+    """One axis of a field: `names` lists the labels it accepts, or is None when unnamed.
 
-    For rows, ``names`` holds one name per object of the field's family in id order ('' for
-    unnamed objects), also when an object owns several rows (``qpos`` of a free joint).
-    ``convert_key_item(key)`` turns a key for this axis (a name, a list of names, or anything
+    For rows, `names` holds one name per object of the field's family in id order ('' for
+    unnamed objects), also when an object owns several rows (`qpos` of a free joint).
+    `convert_key_item(key)` turns a key for this axis (a name, a list of names, or anything
     NumPy accepts) into the NumPy index it selects, as the field indexer does.
     """
 
@@ -38,7 +38,7 @@ class Axis:
         self._convert = convert
 
     def convert_key_item(self, key_item):
-        """Returns the NumPy index ``key_item`` selects on this axis.
+        """Returns the NumPy index `key_item` selects on this axis.
 
         Raises:
           KeyError: for a name this axis does not have.
@@ -98,7 +98,7 @@ class _Rows:
         return [layout.object_name(family, i) for i in range(layout.object_count(family))]
 
     def labels(self, length: int) -> list:
-        """The object name of each of ``length`` rows ('' where unknown)."""
+        """The object name of each of `length` rows ('' where unknown)."""
         labels = [""] * length
         if self._family is None:
             return labels
@@ -138,7 +138,7 @@ class FieldIndexer:
 
     Reading returns what NumPy indexing of the field returns (views for names of objects
     with consecutive rows); assignment writes into MuJoCo's memory. Other attributes are
-    those of the NumPy array (``shape``, ``dtype``, ``copy()``, ...); ``axes`` gives the row
+    those of the NumPy array (`shape`, `dtype`, `copy()`, ...); `axes` gives the row
     and column labels.
     """
 
@@ -172,7 +172,7 @@ class FieldIndexer:
 
     @property
     def axes(self) -> Axes:
-        """``Axes(row, col)``: row labels (object names) and, for 2-D fields, column labels."""
+        """`Axes(row, col)`: row labels (object names) and, for 2-D fields, column labels."""
         array = self.field
         row = Axis(self._rows.names(), self._rows.convert)
         if array.ndim < 2:
@@ -249,7 +249,7 @@ def _format_float(value) -> str:
 
 
 class StructIndexer:
-    """Named access to every array field of an MjModel or MjData (``physics.named.data``)."""
+    """Named access to every array field of an MjModel or MjData (`physics.named.data`)."""
 
     def __init__(self, struct, kind: str, layout: ModelLayout):
         self._struct = struct
@@ -278,7 +278,7 @@ class StructIndexer:
 
 
 def make_struct_indexers(model, data, layout: ModelLayout) -> NamedIndexStructs:
-    """``NamedIndexStructs(model=..., data=...)`` for raw ``mujoco`` model and data."""
+    """`NamedIndexStructs(model=..., data=...)` for raw `mujoco` model and data."""
     return NamedIndexStructs(
         model=StructIndexer(model, field_layout.MODEL, layout),
         data=StructIndexer(data, field_layout.DATA, layout),

@@ -1,4 +1,4 @@
-"""Off-screen rendering for ``Physics.render``: one ``mujoco.Renderer`` per image size."""
+"""Off-screen rendering for `Physics.render`: one `mujoco.Renderer` per image size."""
 
 import contextlib
 from collections.abc import Callable, Iterator
@@ -51,7 +51,7 @@ def camera_index(model: mujoco.MjModel, camera_id) -> int:
 
 
 def frame_limit_error(height: int, width: int, buffer) -> ValueError:
-    """The error for an image larger than the model's offscreen buffer (``vis.global_``)."""
+    """The error for an image larger than the model's offscreen buffer (`vis.global_`)."""
     return ValueError(
         f"image of height {height} and width {width} exceeds the model's "
         f"offscreen buffer ({buffer.offheight} by {buffer.offwidth}); raise "
@@ -61,7 +61,7 @@ def frame_limit_error(height: int, width: int, buffer) -> ValueError:
 
 @contextlib.contextmanager
 def overridden_flags(flags: np.ndarray, overrides: dict | None) -> Iterator[None]:
-    """Sets scene render ``flags`` from ``overrides`` ({name or mjtRndFlag: bool}) inside
+    """Sets scene render `flags` from `overrides` ({name or mjtRndFlag: bool}) inside
     the block and restores them after."""
     saved = flags.copy()
     try:
@@ -73,7 +73,7 @@ def overridden_flags(flags: np.ndarray, overrides: dict | None) -> Iterator[None
 
 
 def render_flag(flag) -> int:
-    """An ``mjtRndFlag`` index from a flag name ('wireframe') or value."""
+    """An `mjtRndFlag` index from a flag name ('wireframe') or value."""
     if isinstance(flag, str):
         member = f"{_RENDER_FLAG_PREFIX}{flag.upper()}"
         if member not in mujoco.mjtRndFlag.__members__:
@@ -88,14 +88,14 @@ def render_flag(flag) -> int:
 
 
 class Renderers:
-    """Renders one model's scenes, keeping a ``mujoco.Renderer`` per (height, width)."""
+    """Renders one model's scenes, keeping a `mujoco.Renderer` per (height, width)."""
 
     def __init__(self, model: mujoco.MjModel):
         self._model = model
         self._renderers = {}
 
     def camera_id(self, camera_id) -> int:
-        """A camera index from a camera name or index (see ``camera_index``)."""
+        """A camera index from a camera name or index (see `camera_index`)."""
         return camera_index(self._model, camera_id)
 
     def render(
@@ -111,7 +111,7 @@ class Renderers:
     ) -> np.ndarray:
         """RGB (H, W, 3) uint8, depth (H, W) float32 in metres, or segmentation (H, W, 2).
 
-        Segmentation pixels hold (object id, ``mjtObj`` type); background is (-1, -1).
+        Segmentation pixels hold (object id, `mjtObj` type); background is (-1, -1).
         """
         check_render_request(depth, segmentation, False, bool(render_flag_overrides))
         camera = self.camera_id(camera_id)
@@ -131,7 +131,7 @@ class Renderers:
                 renderer.disable_segmentation_rendering()
 
     def contexts(self) -> "Contexts | None":
-        """dm_control's ``physics.contexts`` over these renderers, or None before the first
+        """dm_control's `physics.contexts` over these renderers, or None before the first
         render (a renderer made later uploads the model's current assets itself)."""
         if not self._renderers:
             return None
@@ -158,7 +158,7 @@ class Renderers:
 
 
 class _MjrContextPlaceholder:
-    """Stands for "each renderer's ``MjrContext``" in the arguments of ``_Caller.call``."""
+    """Stands for "each renderer's `MjrContext`" in the arguments of `_Caller.call`."""
 
     @property
     def ptr(self) -> "_MjrContextPlaceholder":
@@ -169,9 +169,9 @@ MJR_CONTEXT = _MjrContextPlaceholder()
 
 
 class Contexts(NamedTuple):
-    """What dm_control code reaches through ``physics.contexts`` to re-upload changed assets:
-    ``with contexts.gl.make_current() as ctx: ctx.call(mujoco.mjr_uploadHField,
-    model, contexts.mujoco.ptr, hfield_id)`` runs the upload in every renderer's context."""
+    """What dm_control code reaches through `physics.contexts` to re-upload changed assets:
+    `with contexts.gl.make_current() as ctx: ctx.call(mujoco.mjr_uploadHField,
+    model, contexts.mujoco.ptr, hfield_id)` runs the upload in every renderer's context."""
 
     gl: "_AllGLContexts"
     mujoco: _MjrContextPlaceholder
@@ -181,8 +181,8 @@ class _Caller(NamedTuple):
     renderers: list
 
     def call(self, function: Callable, *args):
-        """Calls ``function`` once per renderer, with its GL context current and
-        ``contexts.mujoco.ptr`` replaced by its ``MjrContext``; returns the last result."""
+        """Calls `function` once per renderer, with its GL context current and
+        `contexts.mujoco.ptr` replaced by its `MjrContext`; returns the last result."""
         result = None
         for renderer in self.renderers:
             renderer._gl_context.make_current()

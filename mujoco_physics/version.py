@@ -9,7 +9,7 @@ MINIMUM_VERSION = "3.3.0"
 
 
 def version_tuple(version: str) -> tuple[int, ...]:
-    """``"3.3.0"`` -> ``(3, 3, 0)``."""
+    """`"3.3.0"` -> `(3, 3, 0)`."""
     return tuple(int(part) for part in re.findall(r"\d+", version)[:3])
 
 

@@ -1,6 +1,6 @@
 """Runs dm_control 1.0.50's own tests, suite, manipulation and locomotion tasks here.
 
-Usage: ``python tools/dm_control_conformance.py [--floor 0.99] [--tasks-only | --tests-only]
+Usage: ``python -m tools.dm_control_conformance [--floor 0.99] [--tasks-only | --tests-only]
 [--packages composer mjcf ...]``
 
 Builds a scratch venv under ``.cache/dm_control_conformance`` with this project and
@@ -35,8 +35,7 @@ import xml.etree.ElementTree as ElementTree
 from pathlib import Path
 from typing import NamedTuple
 
-sys.path.insert(0, str(Path(__file__).resolve().parent))
-import scratch_venv  # noqa: E402
+from tools import ROOT, scratch_venv
 
 CACHE = scratch_venv.CACHE / "dm_control_conformance"
 DM_CONTROL_VERSION = "1.0.50"
@@ -103,7 +102,7 @@ KNOWN_FAILURES = {
 }
 
 _CONFTEST = '''
-"""Written by tools/dm_control_conformance.py: redirect, helpers, wording not checked."""
+"""Written by tools.dm_control_conformance: redirect, helpers, wording not checked."""
 import importlib
 import importlib.util
 import sys
@@ -346,7 +345,7 @@ def run_tasks(python: Path) -> dict:
 def run_readme_examples(python: Path, env: dict, workdir: Path) -> dict:
     """Runs the README's examples of its "Run existing dm_control code" section (the suite
     episode needs dm_control, which the project's own README test does not have)."""
-    text = (scratch_venv.REPO / "README.md").read_text(encoding="utf-8")
+    text = (ROOT / "README.md").read_text(encoding="utf-8")
     section = text.split("## Run existing dm_control code", 1)[1].split("\n## ", 1)[0]
     results = {}
     for number, block in enumerate(section.split("```python\n")[1:], start=1):

@@ -1,8 +1,8 @@
 """Differential MJCF fuzzer: our parse + compile against MuJoCo's parser on mutated models.
 
-Usage: ``python tools/fuzz.py N [--seed S] [--show K] [--timeout SECONDS]``
+Usage: ``python -m tools.fuzz N [--seed S] [--show K] [--timeout SECONDS]``
 
-Builds N documents (mutations of the seed models in tests/mjcf/mjcf_differential.py, and
+Builds N documents (mutations of the seed models in `tools.mjcf_differential`, and
 generated ones), compiles each with ``mujoco.MjModel.from_xml_path`` and with
 ``mjcf.from_path`` + ``mjcf.Physics.from_mjcf_model``, and prints a table by mutation kind:
 agreement, false rejections, silent acceptances, compiled differently, crashes (an exception
@@ -17,14 +17,11 @@ from __future__ import annotations
 import argparse
 import collections
 import multiprocessing
-import os
 import random
 import sys
 import time
 
-sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "tests", "mjcf"))
-
-import mjcf_differential as differential  # noqa: E402
+from tools import mjcf_differential as differential
 
 _COLUMNS = [v for v in differential.Verdict]
 #: Verdicts that are not disagreements of ours.

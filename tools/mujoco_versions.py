@@ -1,6 +1,6 @@
 """Tests every supported MuJoCo minor release; prints release -> passed/failed/skipped.
 
-Usage: ``python tools/mujoco_versions.py [--releases 3.3 4.0] [--strict] [-- PYTEST_ARGS]``
+Usage: ``python -m tools.mujoco_versions [--releases 3.3 4.0] [--strict] [-- PYTEST_ARGS]``
 
 Builds one venv per release under ``.cache/mujoco_versions/<version>`` (kept between runs;
 ``--venvs`` puts them elsewhere), installs this project with its ``[test]`` extra and that
@@ -27,9 +27,10 @@ import time
 from pathlib import Path
 from typing import NamedTuple
 
-REPO = Path(__file__).resolve().parent.parent
-CACHE = REPO / ".cache" / "mujoco_versions"
-_COMPAT_MODULE = REPO / "mujoco_physics" / "version.py"
+from tools import ROOT
+
+CACHE = ROOT / ".cache" / "mujoco_versions"
+_COMPAT_MODULE = ROOT / "mujoco_physics" / "version.py"
 _TAIL_LINES = 15
 _SUMMARY_COUNT = re.compile(r"(\d+) (passed|failed|skipped|errors?|xfailed|xpassed)")
 
@@ -151,7 +152,7 @@ def _install(venv: Path, release: Release, log) -> str:
     # The project's requirements are part of what a venv was built with: rebuild when the
     # `[test]` extra or the dependencies change.
     built_with = (
-        f"{release.version} {hashlib.sha256((REPO / 'pyproject.toml').read_bytes()).hexdigest()}\n"
+        f"{release.version} {hashlib.sha256((ROOT / 'pyproject.toml').read_bytes()).hexdigest()}\n"
     )
     if marker.exists() and marker.read_text(encoding="utf-8") == built_with:
         return ""
@@ -163,7 +164,7 @@ def _install(venv: Path, release: Release, log) -> str:
         # The project's own requirement excludes this mujoco: install the project with its
         # dependencies first, then put the old mujoco in its place. Newer mujoco wheels leave
         # files that pip does not remove (plugins linked to their libmujoco), hence the rmtree.
-        if _run([*pip, "-e", f"{REPO}[test]"], log):
+        if _run([*pip, "-e", f"{ROOT}[test]"], log):
             return "install failed"
         if _run(
             [str(venv / "bin" / "python"), "-m", "pip", "uninstall", "-q", "-y", "mujoco"], log
@@ -173,7 +174,7 @@ def _install(venv: Path, release: Release, log) -> str:
             shutil.rmtree(leftover)
         if _run([*pip, mujoco], log):
             return "install failed"
-    elif _run([*pip, "-e", f"{REPO}[test]", mujoco], log):
+    elif _run([*pip, "-e", f"{ROOT}[test]", mujoco], log):
         return "install failed"
     marker.write_text(built_with, encoding="utf-8")
     return ""
@@ -212,7 +213,7 @@ def run_release(release: Release, venvs: Path, pytest_args: list[str]) -> Outcom
         log.write(f"$ {' '.join(args + pytest_args)}\n")
         log.flush()
         result = subprocess.run(
-            args + pytest_args, cwd=REPO, env=env, capture_output=True, text=True
+            args + pytest_args, cwd=ROOT, env=env, capture_output=True, text=True
         )
         log.write(result.stdout + result.stderr)
     counts = _summary_counts(result.stdout)

@@ -2,7 +2,7 @@
 
 ``ensure_venv(path, requirements, project=True)`` creates ``path`` once with the given pip
 requirements (and this project installed editable), and reuses it while the requirements
-are unchanged. Import it from a tool or benchmark after putting ``tools/`` on ``sys.path``.
+are unchanged.
 """
 
 from __future__ import annotations
@@ -12,8 +12,9 @@ import subprocess
 import sys
 from pathlib import Path
 
-REPO = Path(__file__).resolve().parent.parent
-CACHE = REPO / ".cache"
+from tools import ROOT
+
+CACHE = ROOT / ".cache"
 
 
 def _pip(python: Path, *args: str) -> None:
@@ -35,10 +36,10 @@ def ensure_venv(path: Path, requirements: list[str], *, project: bool = True) ->
         subprocess.run([sys.executable, "-m", "venv", str(path)], check=True)
         _pip(python, "--upgrade", "pip")
         if project:
-            _pip(python, "-e", str(REPO))
+            _pip(python, "-e", str(ROOT))
         if requirements:
             _pip(python, *requirements)
         stamp.write_text(wanted)
     elif project:
-        _pip(python, "--no-deps", "-e", str(REPO))
+        _pip(python, "--no-deps", "-e", str(ROOT))
     return python

@@ -1,5 +1,5 @@
-"""MuJoCo's structs with dm_control's interface, and the ``mjbindings`` aliases (served as
-``dm_control.mujoco.wrapper``)."""
+"""MuJoCo's structs with dm_control's interface, and the `mjbindings` aliases (served as
+`dm_control.mujoco.wrapper`)."""
 
 from mujoco_physics.wrapper import mjbindings
 from mujoco_physics.wrapper.core import (

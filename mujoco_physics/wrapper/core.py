@@ -1,7 +1,7 @@
-"""``MjModel``/``MjData`` with dm_control's interface (``ptr``, ``name2id``, ``disable``, the
-named constructors), the global callbacks, and the visualisation structs with ``ptr``.
+"""`MjModel`/`MjData` with dm_control's interface (`ptr`, `name2id`, `disable`, the
+named constructors), the global callbacks, and the visualisation structs with `ptr`.
 
-Served as ``dm_control.mujoco.wrapper.core``. Attribute reads are forwarded to the wrapped
+Served as `dm_control.mujoco.wrapper.core`. Attribute reads are forwarded to the wrapped
 MuJoCo object; arrays whose size cannot change (every MjModel array, and the MjData arrays
 sized by model counts) are cached on first read, so later reads are plain
 instance-dictionary hits and return the same NumPy view.
@@ -24,7 +24,7 @@ _MJB_NAME = "model.mjb"
 
 class Error(ValueError):
     """A model MuJoCo could not load, or a bad object type or id (dm_control's
-    ``wrapper.Error``; a ValueError, as MuJoCo's own loaders raise)."""
+    `wrapper.Error`; a ValueError, as MuJoCo's own loaders raise)."""
 
 
 # Message formats, under the names dm_control's tests read them from.
@@ -42,7 +42,7 @@ _ENABLE_PREFIX = "mjENBL_"
 
 
 def _object_type(object_type) -> mujoco.mjtObj:
-    """``mujoco.mjtObj`` for a name such as 'geom' or 'camera', or an mjtObj value."""
+    """`mujoco.mjtObj` for a name such as 'geom' or 'camera', or an mjtObj value."""
     if isinstance(object_type, str):
         member = f"mjOBJ_{object_type.upper()}"
         if member not in mujoco.mjtObj.__members__:
@@ -99,7 +99,7 @@ class _StructWrapper:
 
     @property
     def ptr(self):
-        """The wrapped ``mujoco`` object, for passing to ``mujoco.mj_*`` functions."""
+        """The wrapped `mujoco` object, for passing to `mujoco.mj_*` functions."""
         return self._ptr
 
     def __getattr__(self, name):
@@ -128,16 +128,16 @@ def _static_data_fields() -> frozenset:
 
 
 class MjModel(_StructWrapper):
-    """A ``mujoco.MjModel`` with dm_control's helpers: ``ptr``, ``name2id``, ``disable``.
+    """A `mujoco.MjModel` with dm_control's helpers: `ptr`, `name2id`, `disable`.
 
-    ``MjModel(model)`` wraps a ``mujoco.MjModel``; the ``from_*`` constructors load one.
+    `MjModel(model)` wraps a `mujoco.MjModel`; the `from_*` constructors load one.
     """
 
     _cacheable = frozenset(field_layout.MODEL_EXTENTS) | {"opt", "vis", "stat"}
 
     @classmethod
     def from_xml_string(cls, xml_string: str, assets: dict | None = None) -> "MjModel":
-        """Compiles MJCF (or URDF) text; ``assets`` maps file names used in it to bytes.
+        """Compiles MJCF (or URDF) text; `assets` maps file names used in it to bytes.
 
         Raises:
           Error: when MuJoCo cannot compile it (MuJoCo's message).
@@ -146,20 +146,20 @@ class MjModel(_StructWrapper):
 
     @classmethod
     def from_xml_path(cls, xml_path: str) -> "MjModel":
-        """Compiles the MJCF or URDF file at ``xml_path``."""
+        """Compiles the MJCF or URDF file at `xml_path`."""
         return cls(_parse(mujoco.MjModel.from_xml_path, str(xml_path)))
 
     @classmethod
     def from_binary_path(cls, binary_path: str) -> "MjModel":
-        """Loads the MJB model file at ``binary_path``."""
+        """Loads the MJB model file at `binary_path`."""
         return cls(_load(mujoco.MjModel.from_binary_path, str(binary_path)))
 
     @classmethod
     def from_byte_string(cls, byte_string: bytes) -> "MjModel":
-        """Loads a model from MJB bytes (what ``to_bytes`` returns).
+        """Loads a model from MJB bytes (what `to_bytes` returns).
 
         Raises:
-          Error: if ``byte_string`` is not a model binary this MuJoCo can load.
+          Error: if `byte_string` is not a model binary this MuJoCo can load.
         """
         try:
             model = mujoco.MjModel.from_binary_path(_MJB_NAME, {_MJB_NAME: bytes(byte_string)})
@@ -205,12 +205,12 @@ class MjModel(_StructWrapper):
 
     @property
     def name(self) -> str:
-        """The model's name (``<mujoco model=...>``): the first string in ``names``."""
+        """The model's name (`<mujoco model=...>`): the first string in `names`."""
         names = bytes(self._ptr.names)
         return names[: names.index(b"\0")].decode()
 
     def name2id(self, name: str, object_type) -> int:
-        """The id of the object of ``object_type`` ('geom', 'body', ...) called ``name``.
+        """The id of the object of `object_type` ('geom', 'body', ...) called `name`.
 
         Raises:
           ValueError: if there is no such object.
@@ -223,7 +223,7 @@ class MjModel(_StructWrapper):
         return object_id
 
     def id2name(self, object_id: int, object_type) -> str:
-        """The name of object ``object_id`` of ``object_type``; '' when it has none."""
+        """The name of object `object_id` of `object_type`; '' when it has none."""
         return mujoco.mj_id2name(self._ptr, _object_type(object_type), object_id) or ""
 
     def disable(self, *flags) -> contextlib.AbstractContextManager[None]:
@@ -241,10 +241,10 @@ class MjModel(_StructWrapper):
 
 
 class MjData(_StructWrapper):
-    """A ``mujoco.MjData`` with dm_control's ``ptr``, a wrapped ``model`` and helpers.
+    """A `mujoco.MjData` with dm_control's `ptr`, a wrapped `model` and helpers.
 
-    ``MjData(model)`` allocates data for a wrapped ``MjModel``; ``MjData(data)`` wraps a
-    ``mujoco.MjData``.
+    `MjData(model)` allocates data for a wrapped `MjModel`; `MjData(data)` wraps a
+    `mujoco.MjData`.
     """
 
     _cacheable = _static_data_fields()
@@ -294,7 +294,7 @@ class MjData(_StructWrapper):
 
         Args:
           object_id: the object's id or name.
-          object_type: 'body', 'geom', 'site', ... or an ``mjtObj`` value.
+          object_type: 'body', 'geom', 'site', ... or an `mjtObj` value.
           local_frame: whether to express it in the object's frame instead of the world's.
         """
         obj_type = _object_type(object_type)
@@ -308,10 +308,10 @@ class MjData(_StructWrapper):
         return velocity.reshape(2, 3)[::-1]
 
     def contact_force(self, contact_id: int) -> np.ndarray:
-        """The wrench of contact ``contact_id`` in its frame: (force, torque) as (2, 3).
+        """The wrench of contact `contact_id` in its frame: (force, torque) as (2, 3).
 
         Raises:
-          ValueError: if ``contact_id`` is not in [0, ncon).
+          ValueError: if `contact_id` is not in [0, ncon).
         """
         ncon = self._ptr.ncon
         if not 0 <= contact_id < ncon:
@@ -326,7 +326,7 @@ class MjData(_StructWrapper):
 
     @property
     def contact(self):
-        """The active contacts (the first ``ncon`` of the contact buffer)."""
+        """The active contacts (the first `ncon` of the contact buffer)."""
         return self._ptr.contact[: self._ptr.ncon]
 
     def __repr__(self):
@@ -348,7 +348,7 @@ def _parse(loader: Callable, *args, **kwargs) -> mujoco.MjModel:
 
 
 def set_callback(name: str, new_callback=None) -> None:
-    """Sets MuJoCo's global callback ``name`` ('mjcb_passive', 'mjcb_control', ...);
+    """Sets MuJoCo's global callback `name` ('mjcb_passive', 'mjcb_control', ...);
     None removes it."""
     setter = getattr(mujoco, f"set_{name}", None)
     if setter is None:
@@ -359,7 +359,7 @@ def set_callback(name: str, new_callback=None) -> None:
 
 @contextlib.contextmanager
 def callback_context(name: str, new_callback=None) -> Iterator[None]:
-    """Sets callback ``name`` inside the block and restores the previous one after."""
+    """Sets callback `name` inside the block and restores the previous one after."""
     previous = getattr(mujoco, f"get_{name}")()
     set_callback(name, new_callback)
     try:
@@ -369,21 +369,21 @@ def callback_context(name: str, new_callback=None) -> Iterator[None]:
 
 
 def enable_timer(enabled: bool = True) -> None:
-    """Turns MuJoCo's profiling timers (``data.timer``) on or off."""
+    """Turns MuJoCo's profiling timers (`data.timer`) on or off."""
     set_callback("mjcb_time", time.time if enabled else None)
 
 
 def get_schema() -> str:
-    """MuJoCo's MJCF schema as text (``mj_printSchema``)."""
+    """MuJoCo's MJCF schema as text (`mj_printSchema`)."""
     return mujoco.mj_printSchema(False, False)
 
 
 def save_last_parsed_model_to_xml(xml_path: str, check_model: MjModel | None = None) -> None:
-    """Writes the model MuJoCo parsed last (from XML), with ``check_model``'s current
-    values where given, to ``xml_path``.
+    """Writes the model MuJoCo parsed last (from XML), with `check_model`'s current
+    values where given, to `xml_path`.
 
     Raises:
-      ValueError: if ``check_model`` is not the model parsed last.
+      ValueError: if `check_model` is not the model parsed last.
     """
     last = _last_parsed() if _last_parsed is not None else None
     if check_model is not None and getattr(check_model, "ptr", check_model) is not last:
@@ -392,7 +392,7 @@ def save_last_parsed_model_to_xml(xml_path: str, check_model: MjModel | None = N
 
 
 class _OwnPointer:
-    """dm_control's ``ptr`` on a struct that is itself the ``mujoco`` object."""
+    """dm_control's `ptr` on a struct that is itself the `mujoco` object."""
 
     @property
     def ptr(self):
@@ -400,24 +400,24 @@ class _OwnPointer:
 
 
 class MjvCamera(_OwnPointer, mujoco.MjvCamera):
-    """``mujoco.MjvCamera`` with dm_control's ``ptr``."""
+    """`mujoco.MjvCamera` with dm_control's `ptr`."""
 
 
 class MjvOption(_OwnPointer, mujoco.MjvOption):
-    """``mujoco.MjvOption`` with dm_control's ``ptr``."""
+    """`mujoco.MjvOption` with dm_control's `ptr`."""
 
 
 class MjvPerturb(_OwnPointer, mujoco.MjvPerturb):
-    """``mujoco.MjvPerturb`` with dm_control's ``ptr``."""
+    """`mujoco.MjvPerturb` with dm_control's `ptr`."""
 
 
 class MjvFigure(_OwnPointer, mujoco.MjvFigure):
-    """``mujoco.MjvFigure`` with dm_control's ``ptr``."""
+    """`mujoco.MjvFigure` with dm_control's `ptr`."""
 
 
 class MjvScene(_OwnPointer, mujoco.MjvScene):
-    """``mujoco.MjvScene`` for a wrapped model, with dm_control's ``ptr``, ``free`` and
-    ``geoms`` (the ``ngeom`` geoms in use, not the whole buffer)."""
+    """`mujoco.MjvScene` for a wrapped model, with dm_control's `ptr`, `free` and
+    `geoms` (the `ngeom` geoms in use, not the whole buffer)."""
 
     def __init__(self, model: MjModel | None = None, max_geom: int = 1000):
         if model is None:
@@ -434,12 +434,12 @@ class MjvScene(_OwnPointer, mujoco.MjvScene):
 
 
 class MjrContext(_OwnPointer, mujoco.MjrContext):
-    """``mujoco.MjrContext`` with dm_control's ``ptr`` and ``free``, made in ``gl_context``
-    (an object whose ``make_current()`` context manager yields a caller with
-    ``call(function, *args)``, as dm_control's renderers have), or in the current one.
+    """`mujoco.MjrContext` with dm_control's `ptr` and `free`, made in `gl_context`
+    (an object whose `make_current()` context manager yields a caller with
+    `call(function, *args)`, as dm_control's renderers have), or in the current one.
 
     Raises:
-      ValueError: for a ``font_scale`` that is not an ``mjtFontScale`` value.
+      ValueError: for a `font_scale` that is not an `mjtFontScale` value.
     """
 
     def __init__(

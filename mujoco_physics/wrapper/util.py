@@ -1,4 +1,4 @@
-"""String conversions and the library handle (served as ``dm_control.mujoco.wrapper.util``)."""
+"""String conversions and the library handle (served as `dm_control.mujoco.wrapper.util`)."""
 
 import sys
 from types import ModuleType
@@ -9,15 +9,15 @@ DEFAULT_ENCODING = sys.getdefaultencoding()
 
 
 def to_binary_string(s: str | bytes) -> bytes:
-    """``s`` as bytes."""
+    """`s` as bytes."""
     return s if isinstance(s, bytes) else s.encode(DEFAULT_ENCODING)
 
 
 def to_native_string(s: str | bytes) -> str:
-    """``s`` as str."""
+    """`s` as str."""
     return s.decode(DEFAULT_ENCODING) if isinstance(s, bytes) else s
 
 
 def get_mjlib() -> ModuleType:
-    """The MuJoCo function library: the ``mujoco`` module."""
+    """The MuJoCo function library: the `mujoco` module."""
     return mujoco

@@ -1,9 +1,9 @@
 """Differential fuzzing: our MJCF pipeline decides and compiles every document as MuJoCo does.
 
-Mutated seed models and generated documents (tests/mjcf/mjcf_differential.py) are compiled
+Mutated seed models and generated documents (`tools/mjcf_differential.py`) are compiled
 by MuJoCo's own parser and by `mjcf.from_path` + `mjcf.Physics.from_mjcf_model`; both must
 accept or both reject, and accepted documents must compile to the same sizes and arrays.
-The examples are derandomised, so every run checks the same documents; `tools/fuzz.py N`
+The examples are derandomised, so every run checks the same documents; `python -m tools.fuzz N`
 runs as many as asked.
 """
 
@@ -12,7 +12,8 @@ import random
 import pytest
 from hypothesis import HealthCheck, assume, given, settings
 from hypothesis import strategies as st
-from mjcf_differential import MUTATION_KINDS, SEEDS, Verdict, Workspace, document_for, mutate
+
+from tools.mjcf_differential import MUTATION_KINDS, SEEDS, Verdict, Workspace, document_for, mutate
 
 EXAMPLES = 1500
 _ACCEPTED = (Verdict.AGREE, Verdict.DOCUMENTED)
@@ -43,7 +44,7 @@ def test_mutated_documents_get_the_same_decision_and_model_as_mujoco(workspace, 
     document = document_for(kind, rng)
     result = workspace.run(document)
     # A document that crashes MuJoCo's own parser (mujoco 3.3.0 raises FatalError on some
-    # <layer> mutations) has no MuJoCo decision to agree with; tools/fuzz.py counts them.
+    # <layer> mutations) has no MuJoCo decision to agree with; `tools.fuzz` counts them.
     assume(result.verdict != Verdict.MUJOCO_CRASH)
     assert result.verdict in _ACCEPTED, (
         f"{result.verdict.value} [{document.note}]: {result.detail}\n{document.text}"

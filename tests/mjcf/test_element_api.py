@@ -53,6 +53,17 @@ def test_renamed_copy_of_model_is_same():
     assert not clone.is_same_as(root)
 
 
+def _frame_carrying_ball(radius):
+    ball = mjcf.RootElement(model="ball")
+    ball.worldbody.add("geom", type="sphere", size=[radius])
+    return mjcf.RootElement().attach(ball)
+
+
+def test_attachment_frames_are_same_only_when_their_attached_models_are():
+    assert _frame_carrying_ball(0.1).is_same_as(_frame_carrying_ball(0.1))
+    assert not _frame_carrying_ball(0.1).is_same_as(_frame_carrying_ball(0.2))
+
+
 def test_on_demand_inertial_is_none_until_added_and_only_once():
     body = mjcf.RootElement().worldbody.add("body")
     assert body.inertial is None

@@ -3,17 +3,16 @@
 import json
 import pathlib
 import struct
+import subprocess
 import sys
 
 import pytest
 
-ROOT = pathlib.Path(__file__).resolve().parents[2]
-sys.path.insert(0, str(ROOT / "tools"))
-
-import benchmark_results  # noqa: E402
-import docs_charts  # noqa: E402
-import docs_figures  # noqa: E402
-import docs_gallery  # noqa: E402
+from tools import ROOT
+from tools.docs import RESULTS, benchmark_results
+from tools.docs import charts as docs_charts
+from tools.docs import figures as docs_figures
+from tools.docs import gallery as docs_gallery
 
 
 def test_hook_trace_records_reset_hooks_task_first_then_entity():
@@ -204,7 +203,7 @@ def test_observation_updater_and_manipulation_tables_are_parsed():
 
 
 def test_committed_benchmark_results_cover_every_benchmark_and_name_the_machine():
-    results = json.loads(docs_charts.RESULTS.read_text(encoding="utf-8"))
+    results = json.loads(RESULTS.read_text(encoding="utf-8"))
     assert [b["name"] for b in results["benchmarks"]] == [
         b.name for b in benchmark_results.BENCHMARKS
     ]
@@ -212,7 +211,24 @@ def test_committed_benchmark_results_cover_every_benchmark_and_name_the_machine(
     assert results["machine"]["cpu"] and results["machine"]["cores"] >= 1
 
 
-@pytest.mark.parametrize("script", sorted((ROOT / "tools").glob("*.py")), ids=lambda p: p.name)
+_TOOL_MODULES = sorted((ROOT / "tools").rglob("*.py"))
+
+
+@pytest.mark.parametrize("script", _TOOL_MODULES, ids=lambda p: str(p.relative_to(ROOT)))
 def test_every_tool_says_what_it_does_in_its_first_docstring_line(script):
     first_line = script.read_text(encoding="utf-8").splitlines()[0]
     assert first_line.startswith('"""') and len(first_line) > 20
+
+
+@pytest.mark.parametrize("script", _TOOL_MODULES, ids=lambda p: str(p.relative_to(ROOT)))
+def test_no_tool_edits_the_import_path(script):
+    assert "sys.path" not in script.read_text(encoding="utf-8")
+
+
+def test_charts_builder_writes_a_chart_per_benchmark_and_the_performance_tables(tmp_path):
+    subprocess.run([sys.executable, "-m", "tools.docs.charts", str(tmp_path)], check=True, cwd=ROOT)
+    names = [b["name"] for b in json.loads(RESULTS.read_text(encoding="utf-8"))["benchmarks"]]
+    assert sorted(p.name for p in tmp_path.glob("*.svg")) == sorted(f"perf_{n}.svg" for n in names)
+    tables = (tmp_path / "performance_tables.md").read_text(encoding="utf-8")
+    assert tables.startswith("Measured ")
+    assert tables.count("| measurement | time | baseline | ratio | target |") == len(names)

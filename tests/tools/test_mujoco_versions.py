@@ -1,14 +1,8 @@
 """tools/mujoco_versions.py: which releases it tests and how it reads pytest's summary."""
 
-import importlib.util
-import pathlib
-
 import pytest
 
-_PATH = pathlib.Path(__file__).resolve().parents[2] / "tools" / "mujoco_versions.py"
-_spec = importlib.util.spec_from_file_location("mujoco_versions", _PATH)
-mujoco_versions = importlib.util.module_from_spec(_spec)
-_spec.loader.exec_module(mujoco_versions)
+from tools import mujoco_versions
 
 _PIP_VERSIONS = ["4.0.0", "3.17.0", "3.4.0", "3.3.7", "3.3.1", "3.3.0", "3.2.7", "2.3.7"]
 

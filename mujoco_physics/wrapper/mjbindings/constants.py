@@ -1,5 +1,5 @@
-"""MuJoCo's ``mj*`` constants (``mjMAXVAL``, ``mjNGROUP``, ``mjDISABLESTRING``, ...), read from
-the installed ``mujoco``."""
+"""MuJoCo's `mj*` constants (`mjMAXVAL`, `mjNGROUP`, `mjDISABLESTRING`, ...), read from
+the installed `mujoco`."""
 
 import re
 

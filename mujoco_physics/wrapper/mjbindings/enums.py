@@ -1,5 +1,5 @@
-"""Every ``mjt*`` enum of the installed ``mujoco``, as a named tuple of its members' int
-values (``enums.mjtObj.mjOBJ_BODY == 1``), the form dm_control's generated module has."""
+"""Every `mjt*` enum of the installed `mujoco`, as a named tuple of its members' int
+values (`enums.mjtObj.mjOBJ_BODY == 1`), the form dm_control's generated module has."""
 
 import collections
 

@@ -1,4 +1,4 @@
-"""``mjlib``: MuJoCo's functions, which the ``mujoco`` module holds (``mjlib.mj_step``)."""
+"""`mjlib`: MuJoCo's functions, which the `mujoco` module holds (`mjlib.mj_step`)."""
 
 import mujoco
 

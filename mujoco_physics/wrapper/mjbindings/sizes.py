@@ -1,5 +1,5 @@
-"""``array_sizes``: struct name ('mjmodel', 'mjdata') -> field -> its extents, such as
-``('ngeom', 3)``, read from the installed ``mujoco`` (``mujoco.introspect``)."""
+"""`array_sizes`: struct name ('mjmodel', 'mjdata') -> field -> its extents, such as
+`('ngeom', 3)`, read from the installed `mujoco` (`mujoco.introspect`)."""
 
 from mujoco_physics import field_layout
 

@@ -4,7 +4,7 @@ One *document* (MJCF text plus the files it names, in a directory) is compiled t
 MuJoCo (`mujoco.MjModel.from_xml_path`) and by this project (`mjcf.from_path` then
 `mjcf.Physics.from_mjcf_model`). `compare` classifies the pair of outcomes as a `Verdict`.
 Documents come from seed models mutated by one of `MUTATION_KINDS`, or are generated from
-the schema. Used by tests/mjcf/test_differential_fuzz.py and tools/fuzz.py.
+the schema. Used by tests/mjcf/test_differential_fuzz.py and `tools.fuzz`.
 
 The deliberate differences from MuJoCo listed in docs/mujoco_differences.md are encoded
 here: `IGNORED_SIZES`, `IGNORED_ARRAYS` and `_documented_difference`.
@@ -449,7 +449,7 @@ _TAGS_TO_ADD = ("geom", "site", "joint", "body", "camera", "light", "inertial", 
 #: (parent tag, child tag) pairs that make MuJoCo 4.0 itself crash or hang whoever parses
 #: them (docs/mujoco_differences.md): a `<plugin>` inside a `<mesh>` segfaults, and a
 #: `<model>` asset without a file raises RuntimeError and deadlocks the next compile.
-#: tools/fuzz.py runs documents in a worker process and counts these; the in-process
+#: `tools.fuzz` runs documents in a worker process and counts these; the in-process
 #: test never generates them.
 MUJOCO_CRASHERS = frozenset({("mesh", "plugin"), ("asset", "model")})
 

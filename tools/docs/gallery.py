@@ -1,4 +1,4 @@
-"""Renders the docs' task gallery: `python tools/docs_gallery.py OUT` writes OUT/gallery.md.
+"""Renders the docs' task gallery: `python -m tools.docs.gallery OUT` writes OUT/gallery.md.
 
 It also writes one PNG per manipulation task next to it, OUT/<name>.png.
 
@@ -15,10 +15,9 @@ import time
 
 os.environ.setdefault("MUJOCO_GL", "egl")
 
-import manipulation  # noqa: E402  (the GL backend is chosen when mujoco is imported)
+from PIL import Image  # noqa: E402
 
-sys.path.insert(0, str(pathlib.Path(__file__).resolve().parents[1] / "examples"))
-from render_arenas import write_png  # noqa: E402
+import manipulation  # noqa: E402  (the GL backend is chosen when mujoco is imported)
 
 IMAGE_HEIGHT, IMAGE_WIDTH = 300, 400
 _CAMERA = "front_close"
@@ -63,10 +62,8 @@ def render_task(name: str, out: pathlib.Path, tags: tuple[str, ...] = ()) -> Tas
     env = manipulation.load(name, seed=_SEED)
     env.reset()
     image_file = f"{name}.png"
-    write_png(
-        str(out / image_file),
-        env.physics.render(IMAGE_HEIGHT, IMAGE_WIDTH, camera_id=_CAMERA),
-    )
+    image = env.physics.render(IMAGE_HEIGHT, IMAGE_WIDTH, camera_id=_CAMERA)
+    Image.fromarray(image).save(out / image_file)
     action_spec = env.action_spec()
     action_names = action_spec.name.split("\t")
     actions = tuple(
@@ -114,7 +111,7 @@ def gallery_markdown(entries: list[TaskEntry], seconds: float) -> str:
         "",
         f"All {len(entries)} tasks of `manipulation.ALL`, each as the `{_CAMERA}` camera sees "
         f"it right after `manipulation.load(name, seed={_SEED}).reset()`. The pictures and "
-        "the spec tables are produced from the real environments by `tools/docs_gallery.py` "
+        "the spec tables are produced from the real environments by `tools/docs/gallery.py` "
         f"every time the site is built (this build: {seconds:.0f} s for all of them).",
         "",
         "This is the camera the vision tasks observe, there as 84x84 images instead of the "

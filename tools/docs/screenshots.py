@@ -1,6 +1,6 @@
 """Screenshots docs pages in headless Chromium; prints the path of each PNG it writes.
 
-Usage: python tools/screenshot_docs.py SITE_DIR OUT_DIR [PAGE ...] [--height PIXELS]
+Usage: python -m tools.docs.screenshots SITE_DIR OUT_DIR [PAGE ...] [--height PIXELS]
 
 SITE_DIR is `mkdocs build`'s output (default pages: home, a concept page, the gallery).
 The site is served from `python -m http.server` on 127.0.0.1 so that pages load as they

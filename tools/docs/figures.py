@@ -1,4 +1,4 @@
-"""Draws the docs' diagrams from real runs: `python tools/docs_figures.py OUT` writes two SVGs.
+"""Draws the docs' diagrams from real runs: `python -m tools.docs.figures OUT` writes two SVGs.
 
 The files are OUT/lifecycle.svg and OUT/observables_timeline.svg.
 

@@ -1,6 +1,6 @@
 """Runs the benchmarks and saves their tables for the docs in docs/data/benchmark_results.json.
 
-Usage: python tools/benchmark_results.py [--quick] [--note "how loaded the machine was"]
+Usage: python -m tools.docs.benchmark_results [--quick] [--note "how loaded the machine was"]
 
 Each benchmark's printed table is parsed into rows of (measured time, baseline time, ratio),
 where the baseline is the raw `mujoco` work it is compared with, measured in the same run.
@@ -22,8 +22,9 @@ import sys
 
 import mujoco
 
-ROOT = pathlib.Path(__file__).resolve().parents[1]
-RESULTS = ROOT / "docs" / "data" / "benchmark_results.json"
+from tools import ROOT
+from tools.docs import RESULTS
+
 _MANIPULATION_TASKS = (
     "reach_site_features",
     "lift_brick_features",

@@ -1,6 +1,9 @@
-"""Draws the performance charts from docs/data/benchmark_results.json as OUT/perf_<name>.svg.
+"""Draws the performance charts and tables from docs/data/benchmark_results.json into OUT.
 
-Usage: python tools/docs_charts.py OUT
+Usage: python -m tools.docs.charts OUT
+
+Writes OUT/perf_<name>.svg per benchmark and OUT/performance_tables.md, the Markdown that the
+docs hook puts in place of the performance page's marker.
 
 Each chart is a horizontal bar per measured row, its length the ratio to the baseline
 measured in the same run, with a line at 1 (as fast as the baseline) and the two absolute
@@ -12,7 +15,10 @@ import json
 import pathlib
 import sys
 
-RESULTS = pathlib.Path(__file__).resolve().parents[1] / "docs" / "data" / "benchmark_results.json"
+from tools.docs import RESULTS
+
+#: The Markdown of `performance_markdown`, written next to the charts.
+TABLES_FILE = "performance_tables.md"
 
 _WIDTH, _BAR_W, _ROW_H, _TOP, _LEFT = 680, 400, 44, 34, 12
 # Units by size, so that times read as "4.59 ms", never "4.59e+03 µs".
@@ -133,10 +139,13 @@ def write_charts(results: dict, out: pathlib.Path) -> list[pathlib.Path]:
 
 
 def main() -> None:
-    for path in write_charts(
-        json.loads(RESULTS.read_text(encoding="utf-8")), pathlib.Path(sys.argv[1])
-    ):
+    out = pathlib.Path(sys.argv[1])
+    results = json.loads(RESULTS.read_text(encoding="utf-8"))
+    for path in write_charts(results, out):
         print(path)
+    tables = out / TABLES_FILE
+    tables.write_text(performance_markdown(results), encoding="utf-8")
+    print(tables)
 
 
 if __name__ == "__main__":
