@@ -10,9 +10,7 @@ ROOT = pathlib.Path(__file__).resolve().parents[1]
 PACKAGES = ("mujoco_physics", "mjcf", "composer", "manipulation")
 # Still written with RST while other changes to them are open; converted after those land
 # (issue 25, item 6).
-NOT_YET_CONVERTED = frozenset(
-    ("mjcf/binding.py", "mjcf/physics.py", "composer/gym/video_recorder.py")
-)
+NOT_YET_CONVERTED = frozenset(("mjcf/binding.py", "mjcf/physics.py"))
 
 # What RST writes differently: ``literal`` (Markdown: `literal`), :role:`target`,
 # `.. directive::`, a literal block introduced by a line ending in '::', and the rule lines

@@ -1,8 +1,8 @@
 """A Gymnasium wrapper that records every k-th episode to a video file.
 
-Needs gymnasium and the ``video`` extra (imageio, imageio-ffmpeg). Frames and frame rate
+Needs gymnasium and the `video` extra (imageio, imageio-ffmpeg). Frames and frame rate
 follow `composer.video`: a recorded episode of N steps has N + 1 frames, the one rendered
-after ``reset()`` and one after each step.
+after `reset()` and one after each step.
 """
 
 from __future__ import annotations
@@ -19,7 +19,7 @@ from composer.video import EXTENSIONS, EpisodeVideo, VideoWriter
 
 
 class VideoRecorder(gymnasium.Wrapper):
-    """Writes episodes 0, k, 2k, ... of `env` to ``folder/{name_prefix}-{index:06d}{ext}``.
+    """Writes episodes 0, k, 2k, ... of `env` to `folder/{name_prefix}-{index:06d}{ext}`.
 
     Episodes are counted from 0 by `reset()`. A recorded episode's file is finished when
     the episode terminates or is truncated, when `reset()` starts the next episode first,
@@ -27,12 +27,12 @@ class VideoRecorder(gymnasium.Wrapper):
     `composer.video.EpisodeVideo`.
 
     Args:
-      env: a gymnasium environment created with ``render_mode="rgb_array"``.
+      env: a gymnasium environment created with `render_mode="rgb_array"`.
       folder: where the videos go; created if missing.
       every: record every `every`-th episode (k >= 1; 1 records all).
       name_prefix: file names start with this.
-      extension: ``".mp4"`` or ``".gif"``.
-      fps: frames per second; defaults to ``env.metadata["render_fps"]``.
+      extension: `".mp4"` or `".gif"`.
+      fps: frames per second; defaults to `env.metadata["render_fps"]`.
 
     Raises:
       ValueError: naming the argument when `env` does not render RGB arrays, `every` is
