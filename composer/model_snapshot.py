@@ -202,10 +202,11 @@ class ModelSnapshot:
         self._stat = copy.copy(model.stat)
 
     def save(self) -> None:
-        """Takes the model's current parameters as the ones to restore, after a patch of the
-        compiled model (`mjcf.model_patch`) made them those of a fresh compile."""
+        """Takes the model's current arrays and `stat` as the ones to restore, after a patch
+        of the compiled model (`mjcf.model_patch`: it writes arrays, and `mj_setConst`
+        updates `stat`) made them those of a fresh compile."""
         np.copyto(self._saved_buffer, self._buffer)
-        self._save_structs(self._model)
+        self._stat = copy.copy(self._model.stat)
 
     def restore(self) -> None:
         """Writes the saved parameters back into the model."""

@@ -134,8 +134,8 @@ def _write_for(physics, layout: ModelLayout, element, xml_name: str) -> _Write |
     array = getattr(physics.model.ptr, ref.name)
     index = layout.single_index(ref.addressing, object_id)
     value = np.asarray(source._attributes[xml_name], dtype=np.float64)
-    shape = np.shape(array[index])
+    target = array[index]
     # As many numbers as the field holds for the object: MuJoCo fills in missing ones.
-    if value.size != np.prod(shape, dtype=int):
+    if value.size != np.size(target):
         return None
-    return _Write(array, index, value.reshape(shape))
+    return _Write(array, index, value.reshape(np.shape(target)))

@@ -8,8 +8,8 @@ from composer import environment
 
 
 class VariedTask(ReachTask):
-    """Before every episode: a random box colour, floor friction and joint damping (values
-    that patch), all drawn from the environment's random stream."""
+    """Before every episode: a random box colour, floor friction and joint friction loss
+    (values that patch), all drawn from the environment's random stream."""
 
     def __init__(self):
         super().__init__()
@@ -20,7 +20,7 @@ class VariedTask(ReachTask):
         ground = self.arena.mjcf_model.find("geom", "ground")
         ground.friction = [random_state.uniform(0.3, 1.5), 0.005, 0.0001]
         for joint in self.arm.joints:
-            joint.damping = random_state.uniform(0.05, 2.0)
+            joint.frictionloss = random_state.uniform(0.0, 0.5)
 
     def after_compile(self, physics, random_state):
         self.after_compile_calls += 1
@@ -89,7 +89,8 @@ def test_patched_values_are_what_bind_reads_and_survive_episode_writes():
         env.physics.bind(task.box.geom).rgba, task.box.geom.rgba.astype(np.float32)
     )
     np.testing.assert_array_equal(
-        env.physics.bind(task.arm.joints).damping, [joint.damping[0] for joint in task.arm.joints]
+        env.physics.bind(task.arm.joints).frictionloss,
+        [joint.frictionloss for joint in task.arm.joints],
     )
 
 

@@ -17,9 +17,9 @@ _SCENE = """
 <mujoco model="scene">
   <compiler angle="radian"/>
   <default>
-    <joint damping="0.2"/>
+    <joint frictionloss="0.2"/>
     <default class="stiff">
-      <joint damping="3"/>
+      <joint frictionloss="3"/>
     </default>
   </default>
   <worldbody>
@@ -29,7 +29,7 @@ _SCENE = """
       <geom name="upper" type="capsule" fromto="0 0 0 0.3 0 0" size="0.03" rgba="1 0 0 1"/>
       <body name="forearm" pos="0.3 0 0">
         <joint name="elbow" axis="0 1 0"/>
-        <joint name="wrist" axis="1 0 0" damping="0.7"/>
+        <joint name="wrist" axis="1 0 0" frictionloss="0.7"/>
         <geom name="lower" type="box" size="0.1 0.02 0.02"/>
       </body>
     </body>
@@ -66,11 +66,11 @@ def _patch(root, physics, count) -> bool:
     return physics.apply_attribute_changes(root.attribute_changes_since(count))
 
 
-def test_colour_friction_damping_and_ctrlrange_patch_to_a_recompile(scene):
+def test_colour_friction_frictionloss_and_ctrlrange_patch_to_a_recompile(scene):
     root, physics, count = scene
     root.find("geom", "upper").rgba = [0.2, 0.4, 0.6, 0.8]
     root.find("geom", "floor").friction = [0.7, 0.01, 0.0002]
-    root.find("joint", "wrist").damping = 1.3
+    root.find("joint", "wrist").frictionloss = 1.3
     root.find("actuator", "shoulder").ctrlrange = [-0.4, 0.9]
     assert _patch(root, physics, count)
     _assert_equals_a_recompile(root, physics)
@@ -79,20 +79,20 @@ def test_colour_friction_damping_and_ctrlrange_patch_to_a_recompile(scene):
 
 def test_a_default_class_change_reaches_the_elements_that_inherit_it(scene):
     root, physics, count = scene
-    root.default.joint.damping = 0.9
+    root.default.joint.frictionloss = 0.9
     assert _patch(root, physics, count)
     _assert_equals_a_recompile(root, physics)
     # elbow inherits the top-level default; shoulder's class and wrist's own value win.
     np.testing.assert_array_equal(
-        physics.named.model.dof_damping[["shoulder", "elbow", "wrist"]], [3, 0.9, 0.7]
+        physics.named.model.dof_frictionloss[["shoulder", "elbow", "wrist"]], [3, 0.9, 0.7]
     )
 
 
 def test_unsetting_a_value_patches_the_inherited_one(scene):
     root, physics, count = scene
-    del root.find("joint", "wrist").damping
+    del root.find("joint", "wrist").frictionloss
     assert _patch(root, physics, count)
-    assert physics.named.model.dof_damping["wrist"] == 0.2
+    assert physics.named.model.dof_frictionloss["wrist"] == 0.2
     _assert_equals_a_recompile(root, physics)
 
 
@@ -116,6 +116,14 @@ def test_a_change_that_cannot_be_patched_changes_nothing(scene, change):
     changes = root.attribute_changes_since(count)
     assert changes is None or not physics.apply_attribute_changes(changes)
     assert _model_bytes(physics.model.ptr) == before
+
+
+def test_joint_damping_is_not_patched_since_springdamper_can_set_it():
+    root = mjcf.from_xml_string(_SCENE)
+    physics = mjcf.Physics.from_mjcf_model(root)
+    count = root.modification_count
+    root.find("joint", "elbow").damping = 0.4
+    assert not _patch(root, physics, count)
 
 
 def test_joint_range_in_degrees_is_not_patched():
