@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import difflib
 import os
+from typing import NamedTuple
 
 import numpy as np
 
@@ -47,6 +48,18 @@ def _close_matches(word: str, candidates) -> str:
     if not matches:
         return ""
     return " (did you mean " + " or ".join(repr(m) for m in matches) + "?)"
+
+
+class AttributeChange(NamedTuple):
+    """One attribute whose value was set or unset (`RootElement.attribute_changes_since`).
+
+    Attributes:
+      element: the element (possibly a template under `<default>`).
+      attribute: the attribute's XML name (`class`, not `dclass`).
+    """
+
+    element: Element
+    attribute: str
 
 
 class _UnknownAttributeError(AttributeError):
@@ -1051,17 +1064,18 @@ class RootElement(Element):
     def modification_count(self) -> int:
         return self._modification_count
 
-    def attribute_changes_since(self, count: int) -> tuple[tuple[Element, str], ...] | None:
+    def attribute_changes_since(self, count: int) -> tuple[AttributeChange, ...] | None:
         """What changed in this model (and models attached below it) since `count`.
 
         Args:
           count: an earlier `modification_count` of this model.
 
         Returns:
-          The (element, XML attribute name) pairs whose values were set or unset since
-          `count`, each once, when nothing else changed; an empty tuple when nothing
-          changed at all; None when the model's structure changed since `count` (or the
-          record of changes was dropped), so that only a recompile can tell the difference.
+          An `AttributeChange` for each attribute whose value was set or unset since
+          `count`, each once, in the order of their last changes, when nothing else
+          changed; an empty tuple when nothing changed at all; None when the model's
+          structure changed since `count` (or the record of changes was dropped), so that
+          only a recompile can tell the difference.
         """
         if count < self._structure_count or count > self._modification_count:
             return None
@@ -1077,8 +1091,9 @@ class RootElement(Element):
         count = self._modification_count
         for attribute in attributes:
             # Re-inserted, so that the record stays ordered by the time of the last change.
-            changes.pop((element, attribute), None)
-            changes[element, attribute] = count
+            change = AttributeChange(element, attribute)
+            changes.pop(change, None)
+            changes[change] = count
 
     @property
     def parent_model(self) -> RootElement | None:
