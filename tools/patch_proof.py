@@ -5,8 +5,9 @@ Usage: ``python tools/patch_proof.py [--write] [--extra-models DIR]``
 For every candidate (tag, attribute) pair (a float attribute of an element that compiles to
 a MuJoCo object, whose binding field of the same name is an MjModel array) and every model
 of the corpus that has it (the 25 manipulation tasks' models and the scenes below), it
-changes the attribute's value, once on an element and once on a default-class template when
-the model has one, then patches a copy of the compiled model with `mjcf.model_patch`,
+changes the attribute's value, once on an element once on a default-class template, and once
+where nothing set it before (MuJoCo's built-in default applied), as far as the model has
+such elements, then patches a copy of the compiled model with `mjcf.model_patch`,
 recompiles the changed model, and requires every MjModel array (and the `stat` struct) to be
 bit-identical, and every MjData array after `mj_forward` from the same state. A pair is
 proven when every change of it in the corpus passed, by a plain write or, failing that, by a
@@ -224,9 +225,14 @@ def _in_defaults(element) -> bool:
     return parent is not None and parent._spec.name == "default"
 
 
+# The kinds of change the proof makes of each pair, where the model allows.
+_ON_ELEMENT = "a value the element or its default classes set"
+_ON_TEMPLATE = "a default-class template"
+_FROM_UNSET = "a value nothing sets (MuJoCo's built-in default)"
+
+
 def _sites(root, candidates) -> dict:
-    """(tag, attribute) -> up to two elements to change: one plain element and one
-    default-class template (the first of each found), each with a compiled value."""
+    """(tag, attribute) -> {kind: element}: the first element of each kind of change."""
     sites = {}
     for element in _all_elements(root):
         if type(element) is not Element:
@@ -240,17 +246,35 @@ def _sites(root, candidates) -> dict:
             if in_defaults:
                 if name not in element._attributes:
                     continue
+                kind = _ON_TEMPLATE
             elif traversal_utils.default_value_source(element, name) is None:
-                continue
-            kinds = sites.setdefault((tag, name), {})
-            kinds.setdefault(in_defaults, element)
+                kind = _FROM_UNSET
+            else:
+                kind = _ON_ELEMENT
+            sites.setdefault((tag, name), {}).setdefault(kind, element)
     return sites
 
 
 def _perturbed(value) -> np.ndarray | float:
-    """Another valid value: every component moved towards the middle of [0, 1] and past it."""
-    changed = np.asarray(value, dtype=np.float64) * 0.75 + 0.125
-    return float(changed) if np.ndim(value) == 0 else changed
+    """Another valid value: every component moved towards the middle of [0, 1] and past
+    it, each a little further than the one before (so that a range stays a range)."""
+    value = np.asarray(value, dtype=np.float64)
+    changed = value * 0.75 + 0.125 + 0.05 * np.arange(value.size).reshape(value.shape)
+    return float(changed) if changed.ndim == 0 else changed
+
+
+def _current_value(root, base, element, name: str):
+    """The value of attribute `name` that compiles into `element`, or None when it cannot
+    be told (then the change is not made)."""
+    source = traversal_utils.default_value_source(element, name)
+    if source is not None:
+        return source._attributes[name]
+    python_name = element._spec.attributes[name].python_name
+    try:
+        binding = mjcf.Physics.from_compiled_mjcf_model(root, base).bind(element)
+        return np.array(getattr(binding, python_name), dtype=np.float64)
+    except (ValueError, AttributeError):
+        return None
 
 
 def _model_arrays(model: mujoco.MjModel) -> dict[str, bytes]:
@@ -309,14 +333,20 @@ def _prove_change(root, base, element, pair, record: _Record) -> None:
     """Changes `pair` on `element`, compares the patched and the compiled models, undoes it."""
     name = pair[1]
     if _in_defaults(element):
-        source = element
+        current = element._attributes[name]
     else:
-        source = traversal_utils.default_value_source(element, name)
+        current = _current_value(root, base, element, name)
+        if current is None:
+            return
     python_name = element._spec.attributes[name].python_name
     had_value = name in element._attributes
     old = element._attributes.get(name)
     count = root.modification_count
-    setattr(element, python_name, _perturbed(source._attributes[name]))
+    try:
+        setattr(element, python_name, _perturbed(current))
+    except ValueError:
+        # The compiled value does not fit the attribute (a scalar spread over several rows).
+        return
     changes = root.attribute_changes_since(count)
     try:
         compiled = compile_mjcf_model(root)
@@ -346,6 +376,25 @@ def _prove_change(root, base, element, pair, record: _Record) -> None:
     setattr(element, python_name, old if had_value else None)
 
 
+def _prove_change_from_unset(root, element, pair, record: _Record) -> None:
+    """Like `_prove_change` from a value nothing sets: `element` loses its own value of the
+    pair's attribute for the change, if that leaves a value nothing sets."""
+    name = pair[1]
+    if name not in element._attributes:
+        return
+    python_name = element._spec.attributes[name].python_name
+    old = element._attributes[name]
+    setattr(element, python_name, None)
+    try:
+        if traversal_utils.default_value_source(element, name) is None:
+            base = compile_mjcf_model(root)
+            _prove_change(root, base, element, pair, record)
+    except ValueError:
+        pass  # the model needs the value to compile: no such change to make
+    finally:
+        setattr(element, python_name, old)
+
+
 def prove(candidates, extra_models: Path | None = None) -> dict[tuple[str, str], _Record]:
     """Runs every change of the corpus (and of the models in `extra_models`); returns what
     each pair showed."""
@@ -357,6 +406,9 @@ def prove(candidates, extra_models: Path | None = None) -> dict[tuple[str, str],
         for pair, kinds in sorted(sites.items()):
             for element in kinds.values():
                 _prove_change(root, base, element, pair, records[pair])
+            element = kinds.get(_ON_ELEMENT)
+            if element is not None and _FROM_UNSET not in kinds:
+                _prove_change_from_unset(root, element, pair, records[pair])
         print(
             f"  {label}: {sum(len(k) for k in sites.values())} changes of {len(sites)} pairs "
             f"in {time.perf_counter() - started:.1f} s",

@@ -66,15 +66,15 @@ def _patch(root, physics, count) -> bool:
     return physics.apply_attribute_changes(root.attribute_changes_since(count))
 
 
-def test_colour_friction_frictionloss_and_ctrlrange_patch_to_a_recompile(scene):
+def test_colour_friction_frictionloss_and_solref_patch_to_a_recompile(scene):
     root, physics, count = scene
     root.find("geom", "upper").rgba = [0.2, 0.4, 0.6, 0.8]
     root.find("geom", "floor").friction = [0.7, 0.01, 0.0002]
     root.find("joint", "wrist").frictionloss = 1.3
-    root.find("actuator", "shoulder").ctrlrange = [-0.4, 0.9]
+    root.find("geom", "lower").solref = [0.04, 0.8]
     assert _patch(root, physics, count)
     _assert_equals_a_recompile(root, physics)
-    np.testing.assert_array_equal(physics.named.model.actuator_ctrlrange["shoulder"], [-0.4, 0.9])
+    np.testing.assert_array_equal(physics.named.model.geom_solref["lower"], [0.04, 0.8])
 
 
 def test_a_default_class_change_reaches_the_elements_that_inherit_it(scene):
@@ -123,6 +123,16 @@ def test_joint_damping_is_not_patched_since_springdamper_can_set_it():
     physics = mjcf.Physics.from_mjcf_model(root)
     count = root.modification_count
     root.find("joint", "elbow").damping = 0.4
+    assert not _patch(root, physics, count)
+
+
+def test_a_control_range_where_none_was_set_is_not_patched(scene):
+    # MuJoCo then also marks the actuator as limited (autolimits).
+    root, physics, count = scene
+    root.find("actuator", "shoulder").ctrlrange = None
+    physics = mjcf.Physics.from_mjcf_model(root)
+    count = root.modification_count
+    root.find("actuator", "shoulder").ctrlrange = [-1, 1]
     assert not _patch(root, physics, count)
 
 
