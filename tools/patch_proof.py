@@ -9,7 +9,8 @@ changes the attribute's value, once on an element once on a default-class templa
 where nothing set it before (MuJoCo's built-in default applied), as far as the model has
 such elements, then patches a copy of the compiled model with `mjcf.model_patch`,
 recompiles the changed model, and requires every MjModel array (and the `stat` struct) to be
-bit-identical, and every MjData array after `mj_forward` from the same state. A pair is
+bit-identical (and its sizes), and every MjData array after `mj_forward` from the same
+state. A pair is
 proven when every change of it in the corpus passed, by a plain write or, failing that, by a
 write followed by `mj_setConst`.
 
@@ -278,13 +279,14 @@ def _current_value(root, base, element, name: str):
 
 
 def _model_arrays(model: mujoco.MjModel) -> dict[str, bytes]:
+    """Every array and size (`ngravcomp`, ...) of `model`, and its structs' fields, as bytes."""
     arrays = {}
     for name in dir(model):
         if name.startswith("_"):
             continue
         value = getattr(model, name)
-        if isinstance(value, np.ndarray):
-            arrays[name] = value.tobytes()
+        if isinstance(value, (np.ndarray, int)):
+            arrays[name] = np.asarray(value).tobytes()
     for struct in ("opt", "stat", "vis"):
         arrays.update(_struct_bytes(struct, getattr(model, struct)))
     return arrays
