@@ -65,24 +65,20 @@ def _time_limit_warning(time_limit: float, control_timestep: float) -> str | Non
 
 
 def _collected(observables) -> tuple:
-    """The names and observable objects of `task.observables` (a dict or a list of dicts)."""
+    """The names and observable objects of `task.observables` (a dict or a list of dicts),
+    with the containers' types: two results are equal when they hold the same names and
+    the very same observables (observables compare by identity)."""
     dicts = (observables,) if isinstance(observables, dict) else observables
     return type(observables), tuple((type(d), tuple(d.items())) for d in dicts)
 
 
-def _same_collection(first: tuple, second: tuple | None) -> bool:
-    """Whether two `_collected` results hold the same names and the very same observables."""
-    if second is None or first[0] is not second[0] or len(first[1]) != len(second[1]):
-        return False
-    for (first_type, first_items), (second_type, second_items) in zip(first[1], second[1]):
-        if first_type is not second_type or len(first_items) != len(second_items):
-            return False
-        for (first_name, first_observable), (second_name, second_observable) in zip(
-            first_items, second_items
-        ):
-            if first_name != second_name or first_observable is not second_observable:
-                return False
-    return True
+class _ModelUpdate(enum.Enum):
+    """How `Environment._update_model` brought the compiled model up to date."""
+
+    RESTORED = "restored"
+    PATCHED = "patched"
+    LOADED = "loaded"
+    NEW_PHYSICS = "new physics"
 
 
 class Environment(dm_env.Environment):
@@ -109,17 +105,22 @@ class Environment(dm_env.Environment):
         really recompiled when the MJCF tree changed since the last compile;
         otherwise the compiled model's parameters are restored from a copy taken
         right after compiling (undoing any writes through `physics.bind`), which is
-        indistinguishable and much faster. A recompile that changed only parameter
-        values (colours, sizes, masses, ...) loads them into the current model, so
-        the Physics and its bindings carry over; one that changed the model's
-        structure gives a new Physics. If False, this happens only before the first
-        episode (so `after_compile` hooks added after construction still run once), and
-        changes made to the model during an episode persist.
+        indistinguishable and much faster. When only attribute values proven patchable
+        changed (colours, frictions, gains, ...; `mjcf.model_patch`), their compiled
+        fields are written into the model instead of compiling. A recompile that changed
+        only parameter values loads them into the current model, so the Physics and its
+        bindings carry over; one that changed the model's structure gives a new Physics.
+        If False, this happens only before the first episode (so `after_compile` hooks
+        added after construction still run once), and changes made to the model during an
+        episode persist.
       fixed_initial_state: restore the random state at every reset, so that every
         episode starts from the same state.
       delayed_observation_padding: an `ObservationPadding`.
       legacy_step: step with position- and velocity-dependent quantities up to date
         after each step (see `mjcf.Physics.step`).
+      patch_compiled_model: whether a reset may patch the compiled model in place instead
+        of recompiling (see `recompile_mjcf_every_episode`). Either way the episodes are
+        the same, bit for bit; False always recompiles a changed model.
 
     Observables are collected from `task.observables` whenever the model is
     compiled; enabling, disabling or reconfiguring them takes effect at the next
@@ -145,6 +146,8 @@ class Environment(dm_env.Environment):
         fixed_initial_state: bool = False,
         delayed_observation_padding: ObservationPadding = ObservationPadding.ZERO,
         legacy_step: bool = True,
+        *,
+        patch_compiled_model: bool = True,
     ):
         if not isinstance(time_limit, numbers.Real) or math.isnan(time_limit) or time_limit < 0:
             raise ValueError(f"time_limit: expected a number of seconds >= 0, got {time_limit!r}")
@@ -170,15 +173,22 @@ class Environment(dm_env.Environment):
             delayed_observation_padding is ObservationPadding.INITIAL_VALUE
         )
         self._legacy_step = legacy_step
+        self._patch_compiled_model = patch_compiled_model
         self._hooks = EnvironmentHooks(task)
+        # The compiled model and what is built on it (see `_update_model`).
         self._physics = None
         self._physics_proxy = None
         self._physics_view = None
+        self._data = None
+        self._ctrl = None
         self._snapshot = None
+        self._compiled_count = None
+        self._last_model_update = None
+        self._check_action = None
         self._observation_updater = None
         self._n_sub_steps = None
         self._collected_observables = None
-        self._compiled_count = None
+        # Episode bookkeeping.
         self._reset_next_step = True
         self._episode_mjcf_prepared = False
         self._time_limit_checked_for = None
@@ -301,49 +311,66 @@ class Environment(dm_env.Environment):
         """Brings the compiled model up to date with the MJCF tree, as a fresh compile would.
 
         The one place that decides what a reset (and construction) does to the model.
-        dm_control recompiles every episode; each of the three outcomes here gives the
-        same model, and the cheapest one that is exact is taken:
+        dm_control recompiles every episode; each outcome here gives the same model, bit
+        for bit, and the cheapest one that is exact is taken (`_ModelUpdate`):
 
-        1. Restore: the MJCF tree is unchanged since the last compile (its
-           `modification_count`) and the compiled model has a `ModelSnapshot`. The
-           parameters saved right after compiling are written back, undoing writes made
-           through `physics.bind` during the episode. Nothing is compiled; the action
-           check stays.
-        2. Load parameters: the tree changed, but its new compile has the same structure
-           as the current model (`ModelSnapshot.load`: only float parameters such as
-           colours, sizes and masses differ). They are loaded into the current model in
-           place, so the Physics, its data and its bindings stay valid.
-        3. New Physics: the structure changed, snapshots are not supported, or there is
-           no model yet.
+        1. RESTORED: the MJCF tree is unchanged since the last compile and the compiled
+           model has a `ModelSnapshot`. The parameters saved right after compiling are
+           written back, undoing writes made through `physics.bind` during the episode.
+        2. PATCHED: only attribute values changed, each one that `mjcf.model_patch`
+           proved it can write (`RootElement.attribute_changes_since`), and patching is on.
+           The snapshot is restored, the new values are written into the model in place,
+           and the snapshot takes the result.
+        3. LOADED: the tree changed otherwise, but its new compile has the same structure
+           as the current model (`ModelSnapshot.load`: only float parameters differ). They
+           are loaded into the current model in place.
+        4. NEW_PHYSICS: the structure changed, snapshots are not supported, or there is no
+           model yet.
 
-        After 2 and 3, hooks are rescanned and the action check is rebuilt. After every
-        outcome the `after_compile` hooks run, and the observation updater is rebuilt
-        unless the Physics, the sub-steps and the task's observables (names and objects,
-        see `_same_collection`) are all the same as last time: as in dm_control, which
-        builds a new updater at every recompile, an observable added between episodes is
-        observed from the next reset.
+        In every outcome the Physics' bindings and views stay valid except the fourth,
+        which replaces the Physics. After 3 and 4, hooks are rescanned and the action check
+        is rebuilt. After every outcome the `after_compile` hooks run (each outcome stands
+        for dm_control's compile), and the observation updater is rebuilt unless the
+        Physics, the sub-steps and the task's observables (names and objects, see
+        `_collected`) are all the same as last time: as in dm_control, which builds a new
+        updater at every recompile, an observable added between episodes is observed from
+        the next reset.
         """
         root = self._task.root_entity.mjcf_model
-        if self._snapshot is not None and root.modification_count == self._compiled_count:
-            self._snapshot.restore()
-            self._run_after_compile_hooks()
-        else:
-            model = compile_mjcf_model(root)
-            self._compiled_count = root.modification_count
-            if self._snapshot is None or not self._snapshot.load(model):
-                self._replace_physics(root, model)
+        self._last_model_update = self._bring_model_up_to_date(root)
+        self._compiled_count = root.modification_count
+        if self._last_model_update in (_ModelUpdate.LOADED, _ModelUpdate.NEW_PHYSICS):
             self._hooks.refresh_entity_hooks()
-            self._run_after_compile_hooks()
             self._check_action = action_validator(self._task.action_spec(self._physics_proxy))
+        self._run_after_compile_hooks()
         observables = self._task.observables
         collected = _collected(observables)
         if (
             self._observation_updater is None
             or self._task_sub_steps() != self._n_sub_steps
-            or not _same_collection(collected, self._collected_observables)
+            or collected != self._collected_observables
         ):
             self._rebuild_observation_updater(observables)
         self._collected_observables = collected
+
+    def _bring_model_up_to_date(self, root) -> _ModelUpdate:
+        """Does the model part of `_update_model` and says which outcome it took."""
+        snapshot = self._snapshot
+        if snapshot is not None:
+            changes = root.attribute_changes_since(self._compiled_count)
+            if changes == ():
+                snapshot.restore()
+                return _ModelUpdate.RESTORED
+            if changes and self._patch_compiled_model:
+                snapshot.restore()
+                if self._physics.apply_attribute_changes(changes):
+                    snapshot.save()
+                    return _ModelUpdate.PATCHED
+        model = compile_mjcf_model(root)
+        if snapshot is not None and snapshot.load(model):
+            return _ModelUpdate.LOADED
+        self._replace_physics(root, model)
+        return _ModelUpdate.NEW_PHYSICS
 
     def _replace_physics(self, root, model) -> None:
         """Makes a new Physics for `model` the environment's, freeing the old one."""

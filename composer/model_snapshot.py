@@ -171,8 +171,10 @@ class ModelSnapshot:
 
     `load(other)` does the same with the parameters of another compiled model of the
     same structure, so a recompile that only changed parameters (colours, sizes,
-    masses, ...) can reuse everything built on this model. `composer.Environment` decides
-    when a reset restores, loads or compiles afresh in one place: `_update_model`.
+    masses, ...) can reuse everything built on this model. `save()` takes the model's
+    current parameters instead, once they were patched in place. `composer.Environment`
+    decides when a reset restores, patches, loads or compiles afresh in one place:
+    `_update_model`.
 
     Raises (on construction):
       RuntimeError: if `snapshots_supported()` is False.
@@ -198,6 +200,13 @@ class ModelSnapshot:
         self._opt = copy.copy(model.opt)
         self._vis = copy.copy(model.vis)
         self._stat = copy.copy(model.stat)
+
+    def save(self) -> None:
+        """Takes the model's current arrays and `stat` as the ones to restore, after a patch
+        of the compiled model (`mjcf.model_patch`: it writes arrays, and `mj_setConst`
+        updates `stat`) made them those of a fresh compile."""
+        np.copyto(self._saved_buffer, self._buffer)
+        self._stat = copy.copy(self._model.stat)
 
     def restore(self) -> None:
         """Writes the saved parameters back into the model."""

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import difflib
 import os
+from typing import NamedTuple
 
 import mujoco
 import numpy as np
@@ -31,6 +32,8 @@ _ON_DEMAND = frozenset(("inertial", "freejoint"))
 # The world body's identifier in the compiled model (an attached model's world body is its
 # attachment frame, named by the model's scope prefix).
 _WORLD = "world"
+# How many distinct (element, attribute) changes a model records between structural changes.
+_MAX_RECORDED_CHANGES = 4096
 
 # Which compiler attribute names the directory of each file-bearing element's files.
 _ASSET_DIRECTORY = {
@@ -47,6 +50,18 @@ def _close_matches(word: str, candidates) -> str:
     if not matches:
         return ""
     return " (did you mean " + " or ".join(repr(m) for m in matches) + "?)"
+
+
+class AttributeChange(NamedTuple):
+    """One attribute whose value was set or unset (`RootElement.attribute_changes_since`).
+
+    Attributes:
+      element: the element (possibly a template under `<default>`).
+      attribute: the attribute's XML name (`class`, not `dclass`).
+    """
+
+    element: Element
+    attribute: str
 
 
 class _UnknownAttributeError(AttributeError):
@@ -249,7 +264,7 @@ class Element:
             object.__setattr__(self, name, value)
             return
         self._set_attribute(name, value)
-        self._changed()
+        self._changed(self._spec.python_attributes[name].name)
 
     def __delattr__(self, name: str) -> None:
         """Unsets an attribute, or removes a single child (`del root.option`)."""
@@ -268,7 +283,7 @@ class Element:
                 child.remove()
             return
         self._set_attribute(name, None)
-        self._changed()
+        self._changed(self._spec.python_attributes[name].name)
 
     def __dir__(self):
         names = set(super().__dir__())
@@ -311,7 +326,7 @@ class Element:
         if xml_name in self._texts:
             self._texts[xml_name] = attribute_types.xml_text(xml_name, spec.type, array)
         _set_slot(self, "_xml_cache", None)
-        self._changed()
+        self._changed(xml_name)
 
     def set_attributes(self, **attributes) -> None:
         """Sets several attributes at once; a value of None unsets that attribute.
@@ -332,7 +347,8 @@ class Element:
             raise
         finally:
             if done:
-                self._changed()
+                python_attributes = self._spec.python_attributes
+                self._changed(*(python_attributes[name].name for name, _ in done))
 
     def get_attribute_xml_string(self, attribute_name: str, prefix_root=None) -> str | None:
         """The attribute's value as it is written to XML, or None when unset."""
@@ -802,7 +818,13 @@ class Element:
 
     # --------------------------------------------------------------------- bookkeeping
 
-    def _changed(self) -> None:
+    def _changed(self, *attributes: str) -> None:
+        """Invalidates cached text and counts a modification in every enclosing model.
+
+        `attributes` names the XML attributes of this element whose values changed, when
+        that is all that changed; without them the change is structural (see
+        `RootElement.attribute_changes_since`).
+        """
         _set_slot(self, "_xml_cache", None)
         # The cached text of every element that encloses this one (across attachments)
         # includes this one's.
@@ -815,6 +837,7 @@ class Element:
         model = self._root
         while model is not None:
             model._modification_count += 1
+            model._note_change(self, attributes)
             frame = model._frame
             model = frame._root if frame is not None else None
 
@@ -1012,6 +1035,13 @@ class RootElement(Element):
     Attributes beyond `Element`:
       modification_count: an int that grows whenever anything in this model, or in any
         model attached below it, changes. Reading it is O(1).
+
+    Besides the count, a model keeps a record of which attribute values changed since its
+    last structural change (anything other than setting or unsetting an attribute's value:
+    adding, removing, attaching, copying, committing defaults), so that a compiled model
+    can be brought up to date without recompiling (`attribute_changes_since`). The record
+    holds at most `_MAX_RECORDED_CHANGES` distinct (element, attribute) pairs; beyond that
+    it is dropped and counts as a structural change.
     """
 
     __slots__ = (
@@ -1019,6 +1049,8 @@ class RootElement(Element):
         "_frame",
         "_frames",
         "_modification_count",
+        "_structure_count",
+        "_attribute_changes",
         "_files_count",
         "_xml_string_cache",
         "_assets_cache",
@@ -1042,15 +1074,54 @@ class RootElement(Element):
         self._frame = None
         self._frames = []
         self._modification_count = 0
+        self._structure_count = 0
+        self._attribute_changes = {}
         self._files_count = 0
         self._xml_string_cache = None
         self._assets_cache = None
         self.model = model or UNNAMED_MODEL
+        self._start_counting()
+
+    def _start_counting(self) -> None:
+        """Makes the model as built so far count as unmodified."""
         self._modification_count = 0
+        self._structure_count = 0
+        self._attribute_changes.clear()
 
     @property
     def modification_count(self) -> int:
         return self._modification_count
+
+    def attribute_changes_since(self, count: int) -> tuple[AttributeChange, ...] | None:
+        """What changed in this model (and models attached below it) since `count`.
+
+        Args:
+          count: an earlier `modification_count` of this model.
+
+        Returns:
+          An `AttributeChange` for each attribute whose value was set or unset since
+          `count`, each once, in the order of their last changes, when nothing else
+          changed; an empty tuple when nothing changed at all; None when the model's
+          structure changed since `count` (or the record of changes was dropped), so that
+          only a recompile can tell the difference.
+        """
+        if count < self._structure_count or count > self._modification_count:
+            return None
+        return tuple(pair for pair, when in self._attribute_changes.items() if when > count)
+
+    def _note_change(self, element: Element, attributes: tuple[str, ...]) -> None:
+        """Records a change counted in `_modification_count` (see the class docstring)."""
+        changes = self._attribute_changes
+        if not attributes or len(changes) + len(attributes) > _MAX_RECORDED_CHANGES:
+            self._structure_count = self._modification_count
+            changes.clear()
+            return
+        count = self._modification_count
+        for attribute in attributes:
+            # Re-inserted, so that the record stays ordered by the time of the last change.
+            change = AttributeChange(element, attribute)
+            changes.pop(change, None)
+            changes[change] = count
 
     @property
     def parent_model(self) -> RootElement | None:

@@ -222,7 +222,7 @@ def _build(document, escape_separators, model_dir, resolve_references, assets) -
         root.model = model_name
     if resolve_references:
         resolve_reference_strings(root)
-    root._modification_count = 0
+    root._start_counting()
     return root
 
 

@@ -6,6 +6,7 @@ import re
 import mujoco
 
 from mjcf import binding as binding_module
+from mjcf import model_patch
 from mjcf.appearance import forward_neutral_fields
 from mujoco_physics import engine
 from mujoco_physics.engine import PhysicsError
@@ -129,6 +130,21 @@ class Physics(engine.Physics):
         new_binding = binding_module.create(self._sim, self._layout, self._mjcf_model, key, single)
         self._bindings[key] = new_binding
         return new_binding
+
+    def apply_attribute_changes(self, changes) -> bool:
+        """Brings the compiled model up to date with attribute changes, without compiling.
+
+        Args:
+          changes: (element, XML attribute name) pairs of the MJCF model this Physics was
+            compiled from, changed since that compile
+            (`RootElement.attribute_changes_since`).
+
+        Returns:
+          True when the model now equals a fresh compile of the changed MJCF model; its
+          data is then to be reset, as after a compile. False, having changed nothing, when
+          a change is not one that `mjcf.model_patch` can write (then recompile).
+        """
+        return model_patch.patch_model(self, self._layout, changes)
 
     def __getstate__(self) -> dict:
         """What pickling (and ``copy.deepcopy``) keeps: the model and data, with the MJCF

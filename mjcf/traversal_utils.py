@@ -135,3 +135,29 @@ def _actuator_default_tags() -> tuple[str, ...]:
     root = schema.root_spec()
     in_defaults = root.children[constants.DEFAULT].children
     return tuple(tag for tag in root.children[constants.ACTUATOR].children if tag in in_defaults)
+
+
+def default_value_source(element: Element, xml_name: str) -> Element | None:
+    """The element whose value of attribute `xml_name` compiles into `element`.
+
+    `element` itself when it sets the attribute, else the template under the most specific
+    of its default classes that sets it. None when neither does (MuJoCo's built-in default
+    applies) or when `element` takes its defaults from more than one kind of template (an
+    actuator, a `<weld>`, a tendon), which is not resolved here.
+    """
+    if xml_name in element._attributes:
+        return element
+    tags = _default_tags(element)
+    if tags != (element._spec.name,):
+        return None
+    dclass = element._attributes.get("class", _inherited_childclass(element))
+    for default in _default_chain(element, dclass):
+        template = default._singleton_if_present(tags[0])
+        if template is not None and xml_name in template._attributes:
+            return template
+    return None
+
+
+def default_classes(element: Element) -> list[Element]:
+    """The `<default>` elements whose templates apply to `element`, most specific first."""
+    return _default_chain(element, element._attributes.get("class", _inherited_childclass(element)))

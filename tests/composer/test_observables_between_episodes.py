@@ -106,10 +106,10 @@ _SWAPPED = {"a": _B, "b": _A}
     ],
     ids=["same", "none", "fewer", "other_objects", "other_order", "other_dict_type", "in_a_list"],
 )
-def test_same_collection_holds_only_for_the_same_names_objects_and_types(second, same):
+def test_collections_are_equal_only_for_the_same_names_objects_and_types(second, same):
     # Whether the observation updater may be kept: only when nothing it depends on changed.
     first = _collection("a", "b", observables=_BOTH)
-    assert environment._same_collection(first, second) is same
+    assert (first == second) is same
 
 
 @pytest.mark.parametrize(
@@ -122,6 +122,5 @@ def test_same_collection_holds_only_for_the_same_names_objects_and_types(second,
     ],
     ids=["same", "fewer_dicts", "other_dict_type", "more_items"],
 )
-def test_same_collection_compares_lists_of_dicts_dict_by_dict(first, second, same):
-    collected = environment._collected(first), environment._collected(second)
-    assert environment._same_collection(*collected) is same
+def test_collections_compare_lists_of_dicts_dict_by_dict(first, second, same):
+    assert (environment._collected(first) == environment._collected(second)) is same

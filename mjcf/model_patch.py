@@ -1,0 +1,141 @@
+"""Brings a compiled model up to date with attribute changes by writing its fields in place.
+
+A change of an attribute value whose compiled field is the value itself (a colour, a
+friction, a gain, ...) does not need MuJoCo's compiler: writing the value into the field
+gives the same `MjModel` a recompile would. Which (tag, attribute) pairs are like that is
+not decided here but proven, for the installed MuJoCo, by `tools/patch_proof.py`: it
+changes each candidate attribute on real models, patches one copy, recompiles another and
+requires every `MjModel` array and every `MjData` array after `mj_forward` to be
+bit-identical. The proven pairs are the generated table `mjcf/patchable_attributes.py`,
+with, for each, whether `mj_setConst` must run after the write (for fields MuJoCo derives
+constants from, such as masses); the harness runs in CI and fails when the table is stale.
+On a MuJoCo release other than the one the table was proven on nothing is patched.
+
+A change is patched when every changed (element, attribute) of
+`RootElement.attribute_changes_since` is proven, compiled into the Physics and resolvable:
+the value that compiles is set on the element itself or on one of its default classes (see
+`traversal_utils.default_value_source`). A change of a default-class template reaches every
+element of that model whose classes include the template's class. Anything else returns
+False and the caller recompiles.
+"""
+
+from __future__ import annotations
+
+from typing import NamedTuple
+
+import mujoco
+import numpy as np
+
+from mjcf import attribute_types, constants, patchable_attributes, traversal_utils
+from mjcf.binding import element_namespace
+from mjcf.element import Element
+from mujoco_physics.field_layout import FAMILIES, MODEL, ModelLayout
+
+__all__ = ["patch_supported", "patch_model"]
+
+
+class _Write(NamedTuple):
+    """One field write of a patch: `array[index] = value`."""
+
+    array: np.ndarray
+    index: int | slice
+    value: np.ndarray
+
+
+def patch_supported() -> bool:
+    """Whether the proven table applies to the installed MuJoCo."""
+    return mujoco.__version__ == patchable_attributes.MUJOCO_VERSION
+
+
+def patch_model(physics, layout: ModelLayout, changes, *, proven: dict | None = None) -> bool:
+    """Writes the compiled values of changed attributes into `physics`'s model.
+
+    Args:
+      physics: an `mjcf.Physics` compiled from the model that `changes` come from, whose
+        model is the compile of that model as it was before `changes`.
+      layout: the row look-ups of `physics`'s model.
+      changes: (element, XML attribute name) pairs, as `attribute_changes_since` gives them.
+      proven: (tag, attribute) -> whether `mj_setConst` must follow, in place of the
+        generated table (for the proof harness, which decides what the table holds).
+
+    Returns:
+      True when the model now equals a fresh compile (the physics' data is left to the
+      caller to reset: `mj_setConst` uses it as scratch space); False, having changed
+      nothing, when some change cannot be patched (see the module docstring).
+    """
+    if proven is None:
+        if not patch_supported():
+            return False
+        proven = patchable_attributes.PROVEN
+    writes = []
+    set_const = False
+    for element, xml_name in changes:
+        if _in_defaults(element):
+            targets = _elements_using(element, xml_name)
+        else:
+            targets = (element,)
+        for target in targets:
+            if type(target) is not Element:
+                return False
+            needs = proven.get((target._spec.name, xml_name))
+            if needs is None:
+                return False
+            write = _write_for(physics, layout, target, xml_name)
+            if write is None:
+                return False
+            writes.append(write)
+            set_const = set_const or needs
+    for array, index, value in writes:
+        array[index] = value
+    if writes:
+        model = physics.model.ptr
+        if set_const:
+            mujoco.mj_setConst(model, physics.data.ptr)
+        physics.mark_as_dirty()
+    return True
+
+
+def _in_defaults(element) -> bool:
+    parent = element._parent
+    return parent is not None and parent._spec.name == constants.DEFAULT
+
+
+def _elements_using(template, xml_name: str) -> list:
+    """Elements of `template`'s tag that have attribute `xml_name`, in its model, whose
+    default classes include the template's class."""
+    tag = template._spec.name
+    dclass = template._parent
+    return [
+        element
+        for element in template._root._iter_own_tree()
+        if element._spec.name == tag
+        and xml_name in element._spec.attributes
+        and not _in_defaults(element)
+        and dclass in traversal_utils.default_classes(element)
+    ]
+
+
+def _write_for(physics, layout: ModelLayout, element, xml_name: str) -> _Write | None:
+    """The field write that gives `element`'s compiled value of `xml_name`, or None."""
+    source = traversal_utils.default_value_source(element, xml_name)
+    if source is None:
+        return None
+    spec = element._spec.attributes[xml_name]
+    if spec.type.kind != attribute_types.OTHER:
+        return None
+    family = FAMILIES.get(element_namespace(element) or "")
+    ref = family.fields.get(spec.python_name) if family is not None else None
+    if ref is None or ref.struct != MODEL:
+        return None
+    try:
+        object_id = physics.bind(element).element_id
+    except ValueError:
+        return None
+    array = getattr(physics.model.ptr, ref.name)
+    index = layout.single_index(ref.addressing, object_id)
+    value = np.asarray(source._attributes[xml_name], dtype=np.float64)
+    target = array[index]
+    # As many numbers as the field holds for the object: MuJoCo fills in missing ones.
+    if value.size != np.size(target):
+        return None
+    return _Write(array, index, value.reshape(np.shape(target)))

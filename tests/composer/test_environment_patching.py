@@ -1,0 +1,112 @@
+"""composer.Environment resets that patch the compiled model instead of recompiling it."""
+
+import numpy as np
+from composer_scene import ReachTask
+
+import composer
+from composer import environment
+
+
+class VariedTask(ReachTask):
+    """Before every episode: a random box colour, floor friction and joint friction loss
+    (values that patch), all drawn from the environment's random stream."""
+
+    def __init__(self):
+        super().__init__()
+        self.after_compile_calls = 0
+
+    def initialize_episode_mjcf(self, random_state):
+        self.box.geom.rgba = [*random_state.uniform(size=3), 1]
+        ground = self.arena.mjcf_model.find("geom", "ground")
+        ground.friction = [random_state.uniform(0.3, 1.5), 0.005, 0.0001]
+        for joint in self.arm.joints:
+            joint.frictionloss = random_state.uniform(0.0, 0.5)
+
+    def after_compile(self, physics, random_state):
+        self.after_compile_calls += 1
+        # Consumes the random stream, so a missed or extra call would shift everything after.
+        random_state.uniform()
+
+
+def _episodes(env, episodes: int, steps: int = 10) -> list:
+    """The observations and rewards of `episodes` episodes under seeded random actions."""
+    actions = np.random.RandomState(7).uniform(-1, 1, size=(steps, 2))
+    values = []
+    for _ in range(episodes):
+        timestep = env.reset()
+        values.append(timestep.observation)
+        for action in actions:
+            timestep = env.step(action)
+            values.append((timestep.reward, timestep.observation))
+    return values
+
+
+def _count_compiles(monkeypatch) -> list:
+    calls = []
+    original = environment.compile_mjcf_model
+
+    def counting(root):
+        calls.append(root)
+        return original(root)
+
+    monkeypatch.setattr(environment, "compile_mjcf_model", counting)
+    return calls
+
+
+def test_twenty_seeded_episodes_are_bit_identical_with_patching_on_and_off():
+    patched_env = composer.Environment(VariedTask(), random_state=3)
+    compiled_env = composer.Environment(VariedTask(), random_state=3, patch_compiled_model=False)
+    patched, compiled = _episodes(patched_env, 20), _episodes(compiled_env, 20)
+    assert len(patched) == len(compiled) == 20 * 11
+    for first, second in zip(patched, compiled):
+        if isinstance(first, tuple):
+            assert first[0] == second[0]
+            first, second = first[1], second[1]
+        assert list(first) == list(second)
+        for name in first:
+            assert first[name].tobytes() == second[name].tobytes(), name
+    assert patched_env.task.after_compile_calls == compiled_env.task.after_compile_calls == 21
+
+
+def test_a_reset_that_changes_only_patchable_values_does_not_compile(monkeypatch):
+    env = composer.Environment(VariedTask(), random_state=3)
+    compiles = _count_compiles(monkeypatch)
+    for _ in range(5):
+        env.reset()
+    assert compiles == []
+
+
+def test_patched_values_are_what_bind_reads_and_survive_episode_writes():
+    task = VariedTask()
+    env = composer.Environment(task, random_state=3)
+    env.reset()
+    ground = task.arena.mjcf_model.find("geom", "ground")
+    friction = env.physics.bind(ground).friction
+    friction[:] = 9.0
+    env.reset()
+    np.testing.assert_array_equal(env.physics.bind(ground).friction, ground.friction)
+    np.testing.assert_array_equal(
+        env.physics.bind(task.box.geom).rgba, task.box.geom.rgba.astype(np.float32)
+    )
+    np.testing.assert_array_equal(
+        env.physics.bind(task.arm.joints).frictionloss,
+        [joint.frictionloss for joint in task.arm.joints],
+    )
+
+
+def test_turning_patching_off_recompiles_every_changed_model(monkeypatch):
+    env = composer.Environment(VariedTask(), random_state=3, patch_compiled_model=False)
+    compiles = _count_compiles(monkeypatch)
+    for _ in range(3):
+        env.reset()
+    assert len(compiles) == 3
+
+
+def test_a_change_that_is_not_patchable_recompiles(monkeypatch):
+    task = VariedTask()
+    env = composer.Environment(task, random_state=3)
+    compiles = _count_compiles(monkeypatch)
+    task.box.geom.size = [0.08, 0.08, 0.08]
+    env.reset()
+    assert len(compiles) == 1
+    np.testing.assert_array_equal(env.physics.bind(task.box.geom).size, [0.08, 0.08, 0.08])

@@ -1,0 +1,192 @@
+"""mjcf.model_patch: writing changed attribute values into a compiled model equals a recompile.
+
+Each test changes a model, patches a copy of its old compile and recompiles it, then
+compares every MjModel array byte for byte (in the style of test_appearance.py).
+"""
+
+import copy
+
+import mujoco
+import numpy as np
+import pytest
+
+import mjcf
+from mjcf import model_patch, patchable_attributes
+
+_SCENE = """
+<mujoco model="scene">
+  <compiler angle="radian"/>
+  <default>
+    <joint frictionloss="0.2"/>
+    <default class="stiff">
+      <joint frictionloss="3"/>
+    </default>
+  </default>
+  <worldbody>
+    <geom name="floor" type="plane" size="2 2 0.1" friction="1 0.005 0.0001"/>
+    <body name="arm" pos="0 0 0.5">
+      <joint name="shoulder" axis="0 1 0" class="stiff"/>
+      <geom name="upper" type="capsule" fromto="0 0 0 0.3 0 0" size="0.03" rgba="1 0 0 1"/>
+      <body name="forearm" pos="0.3 0 0">
+        <joint name="elbow" axis="0 1 0"/>
+        <joint name="wrist" axis="1 0 0" frictionloss="0.7"/>
+        <geom name="lower" type="box" size="0.1 0.02 0.02"/>
+      </body>
+    </body>
+  </worldbody>
+  <actuator>
+    <motor name="shoulder" joint="shoulder" ctrlrange="-1 1"/>
+  </actuator>
+</mujoco>
+"""
+
+
+@pytest.fixture
+def scene():
+    root = mjcf.from_xml_string(_SCENE)
+    physics = mjcf.Physics.from_mjcf_model(root)
+    return root, physics, root.modification_count
+
+
+def _model_bytes(model: mujoco.MjModel) -> dict[str, bytes]:
+    return {
+        name: value.tobytes()
+        for name in dir(model)
+        if not name.startswith("_") and isinstance(value := getattr(model, name), np.ndarray)
+    }
+
+
+def _assert_equals_a_recompile(root, physics):
+    patched = _model_bytes(physics.model.ptr)
+    compiled = _model_bytes(mjcf.Physics.from_mjcf_model(root).model.ptr)
+    assert [name for name in compiled if patched[name] != compiled[name]] == []
+
+
+def _patch(root, physics, count) -> bool:
+    return physics.apply_attribute_changes(root.attribute_changes_since(count))
+
+
+def test_colour_friction_frictionloss_and_solref_patch_to_a_recompile(scene):
+    root, physics, count = scene
+    root.find("geom", "upper").rgba = [0.2, 0.4, 0.6, 0.8]
+    root.find("geom", "floor").friction = [0.7, 0.01, 0.0002]
+    root.find("joint", "wrist").frictionloss = 1.3
+    root.find("geom", "lower").solref = [0.04, 0.8]
+    assert _patch(root, physics, count)
+    _assert_equals_a_recompile(root, physics)
+    np.testing.assert_array_equal(physics.named.model.geom_solref["lower"], [0.04, 0.8])
+
+
+def test_a_default_class_change_reaches_the_elements_that_inherit_it(scene):
+    root, physics, count = scene
+    root.default.joint.frictionloss = 0.9
+    assert _patch(root, physics, count)
+    _assert_equals_a_recompile(root, physics)
+    # elbow inherits the top-level default; shoulder's class and wrist's own value win.
+    np.testing.assert_array_equal(
+        physics.named.model.dof_frictionloss[["shoulder", "elbow", "wrist"]], [3, 0.9, 0.7]
+    )
+
+
+def test_unsetting_a_value_patches_the_inherited_one(scene):
+    root, physics, count = scene
+    del root.find("joint", "wrist").frictionloss
+    assert _patch(root, physics, count)
+    assert physics.named.model.dof_frictionloss["wrist"] == 0.2
+    _assert_equals_a_recompile(root, physics)
+
+
+@pytest.mark.parametrize(
+    "change",
+    [
+        # A capsule's size also sets its bounding radius and box, and its body's inertia.
+        lambda root: setattr(root.find("geom", "upper"), "size", [0.05]),
+        # Adds a site: the structure changes.
+        lambda root: root.worldbody.add("site", name="marker"),
+        # A value MuJoCo's built-in default gives: nothing in the model says which.
+        lambda root: delattr(root.find("geom", "upper"), "rgba"),
+    ],
+    ids=["geom_size", "structure", "unset_to_builtin_default"],
+)
+def test_a_change_that_cannot_be_patched_changes_nothing(scene, change):
+    root, physics, count = scene
+    before = _model_bytes(physics.model.ptr)
+    root.find("geom", "floor").friction = [0.3, 0.01, 0.0002]
+    change(root)
+    changes = root.attribute_changes_since(count)
+    assert changes is None or not physics.apply_attribute_changes(changes)
+    assert _model_bytes(physics.model.ptr) == before
+
+
+def test_joint_damping_is_not_patched_since_springdamper_can_set_it():
+    root = mjcf.from_xml_string(_SCENE)
+    physics = mjcf.Physics.from_mjcf_model(root)
+    count = root.modification_count
+    root.find("joint", "elbow").damping = 0.4
+    assert not _patch(root, physics, count)
+
+
+def test_a_control_range_where_none_was_set_is_not_patched(scene):
+    # MuJoCo then also marks the actuator as limited (autolimits).
+    root, physics, count = scene
+    root.find("actuator", "shoulder").ctrlrange = None
+    physics = mjcf.Physics.from_mjcf_model(root)
+    count = root.modification_count
+    root.find("actuator", "shoulder").ctrlrange = [-1, 1]
+    assert not _patch(root, physics, count)
+
+
+def test_joint_range_in_degrees_is_not_patched():
+    # The compiler converts degrees to radians, so the value is not the field.
+    root = mjcf.from_xml_string(_SCENE.replace('angle="radian"', 'angle="degree"'))
+    physics = mjcf.Physics.from_mjcf_model(root)
+    count = root.modification_count
+    root.find("joint", "elbow").range = [-30, 30]
+    assert not _patch(root, physics, count)
+
+
+def test_attachment_frames_are_not_patched(scene):
+    root, physics, _ = scene
+    child = mjcf.RootElement(model="child")
+    child.worldbody.add("geom", name="ball", type="sphere", size=[0.1])
+    frame = root.attach(child)
+    physics = mjcf.Physics.from_mjcf_model(root)
+    count = root.modification_count
+    frame.pos = [0, 0, 1]
+    assert not _patch(root, physics, count)
+
+
+def test_an_attached_models_values_patch_through_the_parent(scene):
+    root, _, _ = scene
+    child = mjcf.RootElement(model="child")
+    ball = child.worldbody.add("geom", name="ball", type="sphere", size=[0.1])
+    root.attach(child)
+    physics = mjcf.Physics.from_mjcf_model(root)
+    count = root.modification_count
+    ball.rgba = [0, 1, 0, 0.5]
+    assert _patch(root, physics, count)
+    _assert_equals_a_recompile(root, physics)
+
+
+def test_nothing_patches_on_a_mujoco_the_table_was_not_proven_on(scene, monkeypatch):
+    root, physics, count = scene
+    monkeypatch.setattr(patchable_attributes, "MUJOCO_VERSION", "0.0.0")
+    root.find("geom", "upper").rgba = [0.2, 0.4, 0.6, 0.8]
+    assert not model_patch.patch_supported()
+    assert not _patch(root, physics, count)
+
+
+def test_set_const_pairs_bring_derived_constants_up_to_date():
+    # A camera's position feeds cam_pos0 and cam_poscom0, which mj_setConst computes.
+    root = mjcf.from_xml_string(
+        "<mujoco><worldbody><body name='b' pos='0 0 1'><freejoint/><geom size='0.1'/>"
+        "<camera name='eye' mode='trackcom' pos='0 -1 0'/></body></worldbody></mujoco>"
+    )
+    assert patchable_attributes.PROVEN[("camera", "pos")] is True
+    physics = mjcf.Physics.from_mjcf_model(root)
+    model = copy.copy(physics.model.ptr)
+    count = root.modification_count
+    root.find("camera", "eye").pos = [0, -2, 0.5]
+    assert _patch(root, physics, count)
+    _assert_equals_a_recompile(root, physics)
+    assert _model_bytes(model)["cam_pos0"] != _model_bytes(physics.model.ptr)["cam_pos0"]

@@ -1,0 +1,500 @@
+"""Proves which MJCF attributes `mjcf.model_patch` may write into a compiled model in place.
+
+Usage: ``python tools/patch_proof.py [--write] [--extra-models DIR]``
+
+For every candidate (tag, attribute) pair (a float attribute of an element that compiles to
+a MuJoCo object, whose binding field of the same name is an MjModel array) and every model
+of the corpus that has it (the 25 manipulation tasks' models and the scenes below), it
+changes the attribute's value, once on an element once on a default-class template, and once
+where nothing set it before (MuJoCo's built-in default applied), as far as the model has
+such elements, then patches a copy of the compiled model with `mjcf.model_patch`,
+recompiles the changed model, and requires every MjModel array (and the `stat` struct) to be
+bit-identical (and its sizes), and every MjData array after `mj_forward` from the same
+state. A pair is
+proven when every change of it in the corpus passed, by a plain write or, failing that, by a
+write followed by `mj_setConst`.
+
+Prints one line per pair: how it patches, or why it recompiles (the fields that differ).
+Exits 1 when the proof disagrees with the checked-in table `mjcf/patchable_attributes.py`,
+unless ``--write``, which rewrites the table.
+"""
+
+from __future__ import annotations
+
+import argparse
+import copy
+import dataclasses
+import pprint
+import sys
+import time
+from pathlib import Path
+
+import mujoco
+import numpy as np
+
+sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
+
+import mjcf  # noqa: E402
+from mjcf import (  # noqa: E402
+    attribute_types,
+    model_patch,
+    patchable_attributes,
+    schema,
+    traversal_utils,
+)
+from mjcf.element import Element  # noqa: E402
+from mjcf.physics import compile_mjcf_model  # noqa: E402
+from mujoco_physics.field_layout import FAMILIES, MODEL  # noqa: E402
+
+_NOT_IN_CORPUS = "no model of the corpus has it"
+_TABLE = Path(__file__).resolve().parent.parent / "mjcf" / "patchable_attributes.py"
+
+# Scenes besides the manipulation tasks: degree and radian angles, a joint whose stiffness
+# and damping come from `springdamper`, every primitive geom type, bodies
+# whose mass comes from geoms and bodies with explicit inertia, tendons, actuators of
+# several kinds, equality constraints, lights, cameras, materials and default classes.
+_SCENES = {
+    "creature (degree)": """
+<mujoco>
+  <default>
+    <joint damping="0.1" range="-30 30"/>
+    <default class="knee">
+      <joint range="0 70" armature="0.02"/>
+    </default>
+  </default>
+  <worldbody>
+    <light pos="0 0 3" dir="0 0.3 -1"/>
+    <geom name="floor" type="plane" size="3 3 0.1" friction="1 0.005 0.0001"/>
+    <body name="torso" pos="0 0 0.5" euler="0 0 30">
+      <freejoint/>
+      <geom name="torso" type="sphere" size="0.1" rgba="0.8 0.6 0.4 1"/>
+      <body name="tail" pos="-0.1 0 0">
+        <joint name="tail" axis="0 1 0" springdamper="0.2 0.7" damping="0.3" stiffness="2"/>
+        <geom type="capsule" fromto="0 0 0 -0.2 0 0" size="0.02"/>
+      </body>
+      <body name="thigh" pos="0.1 0 0">
+        <joint name="hip" axis="0 0 1" range="-40 40" stiffness="1"/>
+        <geom type="capsule" fromto="0 0 0 0.2 0 0" size="0.03"/>
+        <body name="shin" pos="0.2 0 0">
+          <joint name="knee" class="knee" axis="0 1 0" frictionloss="0.01"/>
+          <geom type="capsule" fromto="0 0 0 0.3 0 -0.3" size="0.03"/>
+        </body>
+      </body>
+    </body>
+  </worldbody>
+  <actuator>
+    <motor joint="hip" gear="10" ctrlrange="-1 1"/>
+    <position joint="knee" kp="5" ctrlrange="0 1"/>
+  </actuator>
+</mujoco>
+""",
+    "primitives (radian)": """
+<mujoco>
+  <compiler angle="radian"/>
+  <option timestep="0.002"/>
+  <default>
+    <geom friction="0.8 0.01 0.001" rgba="0.5 0.5 0.5 1" density="900" solref="0.02 1"/>
+    <joint damping="0.3" armature="0.01" stiffness="0.5"/>
+    <site size="0.02"/>
+    <default class="limb">
+      <geom size="0.04 0.2" type="capsule" margin="0.001"/>
+      <joint range="-1 1" frictionloss="0.02"/>
+    </default>
+  </default>
+  <asset>
+    <material name="shiny" rgba="0.2 0.3 0.4 1" specular="0.4" shininess="0.6"/>
+  </asset>
+  <worldbody>
+    <light pos="0 0 3" dir="0 0 -1" diffuse="0.7 0.7 0.7"/>
+    <camera name="side" pos="0 -3 1" xyaxes="1 0 0 0 0.3 1" fovy="50"/>
+    <geom name="floor" type="plane" size="3 3 0.1" material="shiny"/>
+    <body name="ball" pos="0 0 1">
+      <freejoint/>
+      <geom name="ball" type="sphere" size="0.1" mass="0.5"/>
+      <site name="ball_top" pos="0 0 0.1"/>
+    </body>
+    <body name="crate" pos="0.5 0 0.5">
+      <joint name="slide" type="slide" axis="1 0 0" range="-0.5 0.5"/>
+      <geom name="crate" type="box" size="0.1 0.15 0.05"/>
+      <geom name="lid" type="ellipsoid" pos="0 0 0.06" size="0.1 0.1 0.02"/>
+    </body>
+    <body name="arm" pos="-0.5 0 0.8" childclass="limb">
+      <inertial pos="0 0 -0.1" mass="1.2" diaginertia="0.01 0.01 0.002"/>
+      <joint name="shoulder" axis="0 1 0"/>
+      <geom name="upper" fromto="0 0 0 0 0 -0.3"/>
+      <body name="forearm" pos="0 0 -0.3">
+        <joint name="elbow" axis="0 1 0" range="-2 0.5"/>
+        <geom name="forearm" type="cylinder" size="0.03 0.12" pos="0 0 -0.12"/>
+        <site name="hand" pos="0 0 -0.25"/>
+      </body>
+    </body>
+  </worldbody>
+  <tendon>
+    <fixed name="coupling" stiffness="2" damping="0.1">
+      <joint joint="shoulder" coef="1"/>
+      <joint joint="elbow" coef="-0.5"/>
+    </fixed>
+    <spatial name="cord" width="0.005" rgba="1 1 0 1">
+      <site site="ball_top"/>
+      <site site="hand"/>
+    </spatial>
+  </tendon>
+  <equality>
+    <joint joint1="shoulder" joint2="elbow" polycoef="0 0.5 0 0 0" solref="0.05 1"/>
+  </equality>
+  <actuator>
+    <motor name="shoulder" joint="shoulder" gear="2" ctrlrange="-1 1"/>
+    <position name="elbow" joint="elbow" kp="20" ctrlrange="-1 1"/>
+    <general name="slide" joint="slide" gainprm="5" biasprm="0 -1 0" forcerange="-3 3"/>
+  </actuator>
+  <sensor>
+    <jointpos joint="shoulder" noise="0.01"/>
+    <framepos objtype="site" objname="hand"/>
+  </sensor>
+</mujoco>
+""",
+}
+
+
+@dataclasses.dataclass
+class _Record:
+    """What the corpus showed for one (tag, attribute) pair.
+
+    A change that `mjcf.model_patch` declines (a value with fewer numbers than the field, a
+    value from MuJoCo's built-in default, an actuator's default class) is neither for nor
+    against the pair: the patch refuses it at run time too, and the model recompiles.
+    """
+
+    changes: int = 0
+    declined: int = 0
+    plain_failures: int = 0
+    failures: int = 0
+    differing: set = dataclasses.field(default_factory=set)
+
+
+def _candidates() -> set[tuple[str, str]]:
+    """(tag, attribute) pairs whose attribute is a float and whose field is an MjModel array."""
+    pairs = set()
+    for spec in schema.all_specs():
+        family = FAMILIES.get(spec.namespace or "")
+        if family is None:
+            continue
+        for name, attribute in spec.attributes.items():
+            value_type = attribute.type
+            if value_type.kind != attribute_types.OTHER:
+                continue
+            if getattr(value_type, "dtype", None) not in (float, np.float64):
+                continue
+            ref = family.fields.get(attribute.python_name)
+            if ref is not None and ref.struct == MODEL:
+                pairs.add((spec.name, name))
+    return pairs
+
+
+def _corpus(extra_models: Path | None = None):
+    """Yields (label, RootElement) for every model the proof changes."""
+    from manipulation.tasks import registry
+
+    seen = set()
+    for name in registry.names():
+        root = registry.build_task(name).root_entity.mjcf_model
+        xml = root.to_xml_string()
+        if xml not in seen:
+            seen.add(xml)
+            yield name, root
+    for label, xml in _SCENES.items():
+        yield label, mjcf.from_xml_string(xml)
+    for path in sorted(extra_models.glob("*.xml")) if extra_models else ():
+        try:
+            yield path.name, mjcf.from_path(str(path))
+        except (ValueError, OSError) as error:
+            print(f"  {path.name}: skipped ({error})", file=sys.stderr)
+
+
+def _all_elements(root) -> list[Element]:
+    """Every element of `root` and of the models attached below it."""
+    found = []
+    models = [root]
+    for model in models:
+        found.extend(model._iter_own_tree())
+        models.extend(frame._attached for frame in model._frames)
+    return found
+
+
+def _in_defaults(element) -> bool:
+    parent = element._parent
+    return parent is not None and parent._spec.name == "default"
+
+
+# The kinds of change the proof makes of each pair, where the model allows.
+_ON_ELEMENT = "a value the element or its default classes set"
+_ON_TEMPLATE = "a default-class template"
+_FROM_UNSET = "a value nothing sets (MuJoCo's built-in default)"
+
+
+def _sites(root, candidates) -> dict:
+    """(tag, attribute) -> {kind: element}: the first element of each kind of change."""
+    sites = {}
+    for element in _all_elements(root):
+        if type(element) is not Element:
+            # Attachment frames and model roots are never patched (see mjcf.model_patch).
+            continue
+        tag = element._spec.name
+        in_defaults = _in_defaults(element)
+        for name in element._spec.attributes:
+            if (tag, name) not in candidates:
+                continue
+            if in_defaults:
+                if name not in element._attributes:
+                    continue
+                kind = _ON_TEMPLATE
+            elif traversal_utils.default_value_source(element, name) is None:
+                kind = _FROM_UNSET
+            else:
+                kind = _ON_ELEMENT
+            sites.setdefault((tag, name), {}).setdefault(kind, element)
+    return sites
+
+
+def _perturbed(value) -> np.ndarray | float:
+    """Another valid value: every component moved towards the middle of [0, 1] and past
+    it, each a little further than the one before (so that a range stays a range)."""
+    value = np.asarray(value, dtype=np.float64)
+    changed = value * 0.75 + 0.125 + 0.05 * np.arange(value.size).reshape(value.shape)
+    return float(changed) if changed.ndim == 0 else changed
+
+
+def _current_value(root, base, element, name: str):
+    """The value of attribute `name` that compiles into `element`, or None when it cannot
+    be told (then the change is not made)."""
+    source = traversal_utils.default_value_source(element, name)
+    if source is not None:
+        return source._attributes[name]
+    python_name = element._spec.attributes[name].python_name
+    try:
+        binding = mjcf.Physics.from_compiled_mjcf_model(root, base).bind(element)
+        return np.array(getattr(binding, python_name), dtype=np.float64)
+    except (ValueError, AttributeError):
+        return None
+
+
+def _model_arrays(model: mujoco.MjModel) -> dict[str, bytes]:
+    """Every array and size (`ngravcomp`, ...) of `model`, and its structs' fields, as bytes."""
+    arrays = {}
+    for name in dir(model):
+        if name.startswith("_"):
+            continue
+        value = getattr(model, name)
+        if isinstance(value, (np.ndarray, int)):
+            arrays[name] = np.asarray(value).tobytes()
+    for struct in ("opt", "stat", "vis"):
+        arrays.update(_struct_bytes(struct, getattr(model, struct)))
+    return arrays
+
+
+def _struct_bytes(label: str, struct) -> dict[str, bytes]:
+    """The fields of a MuJoCo struct (nested ones flattened) as bytes, keyed 'opt.timestep'."""
+    found = {}
+    for name in dir(struct):
+        if name.startswith("_"):
+            continue
+        value = getattr(struct, name)
+        if isinstance(value, (int, float, np.ndarray)):
+            found[f"{label}.{name}"] = np.asarray(value).tobytes()
+        elif not callable(value) and not isinstance(value, type):
+            found.update(_struct_bytes(f"{label}.{name}", value))
+    return found
+
+
+def _data_arrays(model: mujoco.MjModel, data: mujoco.MjData) -> dict[str, bytes]:
+    """MjData arrays after a reset and `mj_forward`. The caller passes the same `data` for
+    both models, so that scratch memory MuJoCo leaves unwritten holds the same bytes."""
+    mujoco.mj_resetData(model, data)
+    mujoco.mj_forward(model, data)
+    return {
+        name: value.tobytes()
+        for name in dir(data)
+        if not name.startswith("_") and isinstance(value := getattr(data, name), np.ndarray)
+    }
+
+
+def _differences(patched: mujoco.MjModel, compiled: mujoco.MjModel) -> list[str]:
+    """The MjModel arrays, then the MjData arrays after mj_forward, that are not identical."""
+    model_patched, model_compiled = _model_arrays(patched), _model_arrays(compiled)
+    differing = [name for name in model_compiled if model_patched[name] != model_compiled[name]]
+    data = mujoco.MjData(compiled)
+    data_patched = _data_arrays(patched, data)
+    data_compiled = _data_arrays(compiled, data)
+    differing += [
+        f"data.{name}" for name in data_compiled if data_patched[name] != data_compiled[name]
+    ]
+    return differing
+
+
+def _prove_change(root, base, element, pair, record: _Record) -> None:
+    """Changes `pair` on `element`, compares the patched and the compiled models, undoes it."""
+    name = pair[1]
+    if _in_defaults(element):
+        current = element._attributes[name]
+    else:
+        current = _current_value(root, base, element, name)
+        if current is None:
+            return
+    python_name = element._spec.attributes[name].python_name
+    had_value = name in element._attributes
+    old = element._attributes.get(name)
+    count = root.modification_count
+    try:
+        setattr(element, python_name, _perturbed(current))
+    except ValueError:
+        # The compiled value does not fit the attribute (a scalar spread over several rows).
+        return
+    changes = root.attribute_changes_since(count)
+    try:
+        compiled = compile_mjcf_model(root)
+    except ValueError:
+        compiled = None
+    record.changes += 1
+    if compiled is None:
+        record.failures += 1
+        record.differing.add("(the changed model does not compile)")
+    else:
+        outcomes = []
+        for set_const in (False, True):
+            physics = mjcf.Physics.from_compiled_mjcf_model(root, copy.copy(base))
+            if not model_patch.patch_model(
+                physics, physics._layout, changes, proven={pair: set_const}
+            ):
+                record.declined += 1
+                break
+            outcomes.append(_differences(physics.model.ptr, compiled))
+            if not outcomes[-1]:
+                break
+        if outcomes and outcomes[0]:
+            record.plain_failures += 1
+        if outcomes and outcomes[-1]:
+            record.failures += 1
+            record.differing.update(outcomes[-1])
+    setattr(element, python_name, old if had_value else None)
+
+
+def _prove_change_from_unset(root, element, pair, record: _Record) -> None:
+    """Like `_prove_change` from a value nothing sets: `element` loses its own value of the
+    pair's attribute for the change, if that leaves a value nothing sets."""
+    name = pair[1]
+    if name not in element._attributes:
+        return
+    python_name = element._spec.attributes[name].python_name
+    old = element._attributes[name]
+    setattr(element, python_name, None)
+    try:
+        if traversal_utils.default_value_source(element, name) is None:
+            base = compile_mjcf_model(root)
+            _prove_change(root, base, element, pair, record)
+    except ValueError:
+        pass  # the model needs the value to compile: no such change to make
+    finally:
+        setattr(element, python_name, old)
+
+
+def prove(candidates, extra_models: Path | None = None) -> dict[tuple[str, str], _Record]:
+    """Runs every change of the corpus (and of the models in `extra_models`); returns what
+    each pair showed."""
+    records = {pair: _Record() for pair in candidates}
+    for label, root in _corpus(extra_models):
+        started = time.perf_counter()
+        base = compile_mjcf_model(root)
+        sites = _sites(root, candidates)
+        for pair, kinds in sorted(sites.items()):
+            for element in kinds.values():
+                _prove_change(root, base, element, pair, records[pair])
+            element = kinds.get(_ON_ELEMENT)
+            if element is not None and _FROM_UNSET not in kinds:
+                _prove_change_from_unset(root, element, pair, records[pair])
+        print(
+            f"  {label}: {sum(len(k) for k in sites.values())} changes of {len(sites)} pairs "
+            f"in {time.perf_counter() - started:.1f} s",
+            file=sys.stderr,
+        )
+    return records
+
+
+def _verdicts(records) -> tuple[dict, dict]:
+    proven, refused = {}, {}
+    for pair, record in sorted(records.items()):
+        if record.changes == 0:
+            refused[pair] = _NOT_IN_CORPUS
+        elif record.changes == record.declined:
+            refused[pair] = "declined by mjcf.model_patch wherever the corpus has it"
+        elif record.failures:
+            shown = sorted(record.differing)
+            refused[pair] = ", ".join(shown[:6]) + (" ..." if len(shown) > 6 else "")
+        else:
+            proven[pair] = record.plain_failures > 0
+    return proven, refused
+
+
+def _table_text(proven: dict, refused: dict) -> str:
+    return f'''"""Generated by `python tools/patch_proof.py --write`; do not edit by hand.
+
+The (tag, XML attribute) pairs whose compiled fields `mjcf.model_patch` writes in place,
+proven bit-identical to a recompile on mujoco {mujoco.__version__} (see `tools/patch_proof.py`).
+"""
+
+MUJOCO_VERSION = "{mujoco.__version__}"
+
+# (tag, attribute) -> whether mj_setConst must run after the write.
+PROVEN: dict[tuple[str, str], bool] = {pprint.pformat(proven, width=90, sort_dicts=True)}
+
+# (tag, attribute) -> why it recompiles: the fields a write cannot make identical, or
+# that no model of the proof's corpus has it.
+REFUSED: dict[tuple[str, str], str] = {pprint.pformat(refused, width=90, sort_dicts=True)}
+'''
+
+
+def main() -> int:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--write", action="store_true", help="rewrite the checked-in table")
+    parser.add_argument(
+        "--extra-models",
+        type=Path,
+        help="a folder of MJCF files to change as well (e.g. dm_control's suite/); a one-off "
+        "check: the pairs the table proves must still pass (the table is not compared)",
+    )
+    args = parser.parse_args()
+    started = time.perf_counter()
+    proven, refused = _verdicts(prove(_candidates(), args.extra_models))
+    for pair, set_const in proven.items():
+        how = "write, mj_setConst" if set_const else "write"
+        print(f"patch      {pair[0]:>12} {pair[1]:<16} {how}")
+    for pair, reason in refused.items():
+        print(f"recompile  {pair[0]:>12} {pair[1]:<16} {reason}")
+    seconds = time.perf_counter() - started
+    print(f"{len(proven)} pairs patch, {len(refused)} recompile ({seconds:.0f} s)")
+    if args.extra_models:
+        failing = sorted(set(patchable_attributes.PROVEN) - set(proven))
+        for pair in failing:
+            if refused[pair] != _NOT_IN_CORPUS:
+                print(f"proven in the table but failing here: {pair}: {refused[pair]}")
+        return 1 if any(refused[pair] != _NOT_IN_CORPUS for pair in failing) else 0
+    if args.write:
+        _TABLE.write_text(_table_text(proven, refused))
+        print(f"wrote {_TABLE}")
+        return 0
+    if mujoco.__version__ != patchable_attributes.MUJOCO_VERSION:
+        print(
+            f"the table was proven on mujoco {patchable_attributes.MUJOCO_VERSION}, this is "
+            f"{mujoco.__version__}: nothing patches here (not a failure)"
+        )
+        return 0
+    if proven != patchable_attributes.PROVEN or refused != patchable_attributes.REFUSED:
+        print(
+            "mjcf/patchable_attributes.py is stale: run `python tools/patch_proof.py --write`",
+            file=sys.stderr,
+        )
+        return 1
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
