@@ -1,12 +1,6 @@
-"""tools/patch_proof.py proves value-only attributes and refuses those the compiler derives."""
+"""tools.patch_proof proves value-only attributes and refuses those the compiler derives."""
 
-import pathlib
-import sys
-
-ROOT = pathlib.Path(__file__).resolve().parents[2]
-sys.path.insert(0, str(ROOT / "tools"))
-
-import patch_proof  # noqa: E402
+from tools import patch_proof
 
 
 def test_colour_is_proven_and_geom_size_and_body_pos_are_refused_with_their_fields():
