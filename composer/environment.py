@@ -14,9 +14,9 @@ import mjcf
 from composer import observation
 from composer.action_validation import action_validator
 from composer.hooks import HOOK_NAMES, EnvironmentHooks
-from composer.model_snapshot import ModelSnapshot, snapshots_supported
 from composer.weak_physics import WeakPhysics
 from mjcf.physics import compile_mjcf_model
+from mujoco_physics.model_snapshot import ModelSnapshot, snapshots_supported
 
 __all__ = [
     "HOOK_NAMES",

@@ -1,10 +1,10 @@
-"""composer.model_snapshot: the field-by-field struct copy used where MjModel's structs
+"""mujoco_physics.model_snapshot: the field-by-field struct copy used where MjModel's structs
 have no setter (mujoco before 3.16)."""
 
 import mujoco
 import numpy as np
 
-from composer.model_snapshot import _copy_struct
+from mujoco_physics.model_snapshot import _copy_struct
 
 _SOURCE = """
 <mujoco>

@@ -1,10 +1,10 @@
-"""composer.model_snapshot: restoring a compiled model's parameters in place."""
+"""mujoco_physics.model_snapshot: restoring a compiled model's parameters in place."""
 
 import mujoco
 import numpy as np
 import pytest
 
-from composer.model_snapshot import ModelSnapshot, snapshots_supported
+from mujoco_physics.model_snapshot import ModelSnapshot, snapshots_supported
 
 _XML = """
 <mujoco>
