@@ -1,15 +1,15 @@
-"""``physics.bind(element)``: the MuJoCo fields of MJCF elements as attributes.
+"""`physics.bind(element)`: the MuJoCo fields of MJCF elements as attributes.
 
 A binding's attributes are the MjModel/MjData fields of the elements' object family with the
-family prefix stripped (``geom_rgba`` -> ``rgba``, ``jnt_range`` -> ``range``,
-``dof_damping`` -> ``damping``, ``ten_length`` -> ``length``), as listed by
-``mujoco_physics.field_layout``. Index arrays are computed once per attribute; rows that are
+family prefix stripped (`geom_rgba` -> `rgba`, `jnt_range` -> `range`,
+`dof_damping` -> `damping`, `ten_length` -> `length`), as listed by
+`mujoco_physics.field_layout`. Index arrays are computed once per attribute; rows that are
 consecutive are served as NumPy views, other rows are gathered into a reused buffer.
 
 Writes through a binding to an MjModel field or a simulation input (qpos, qvel, ctrl, ...)
 mark the physics dirty; the next read of a derived quantity (xpos, sensordata, ...) through
-any binding first runs ``mj_forward``. Writes to the model's appearance fields (colours,
-materials; ``mjcf.appearance.forward_neutral_fields``) do not, since ``mj_forward`` does not
+any binding first runs `mj_forward`. Writes to the model's appearance fields (colours,
+materials; `mjcf.appearance.forward_neutral_fields`) do not, since `mj_forward` does not
 read them.
 """
 
@@ -46,9 +46,9 @@ PICKLING_NOT_SUPPORTED = (
 class _BoundArray(np.ndarray):
     """Rows of a MuJoCo array read through a binding; item assignment writes them back.
 
-    When ``_source`` is set the array is a gathered copy of ``_source[_rows]``: an item
+    When `_source` is set the array is a gathered copy of `_source[_rows]`: an item
     assignment updates the copy, then writes the rows it touched back to the source.
-    Otherwise it is a view and assignment reaches MuJoCo directly. ``_after_write`` runs
+    Otherwise it is a view and assignment reaches MuJoCo directly. `_after_write` runs
     after every assignment (marks the physics dirty, clears frame flags).
     """
 
@@ -139,21 +139,21 @@ class Binding:
     """The MjModel/MjData fields of one MJCF element, or of a list of same-family elements.
 
     Attribute names are MuJoCo field names with the family prefix stripped: for a geom
-    ``xpos``, ``xmat``, ``size``, ``rgba``, ``pos``, ``friction``, ...; for a joint ``qpos``,
-    ``qvel``, ``qfrc_actuator``, ``range``, ``axis``, ``damping``, ``armature``, ...; for an
-    actuator ``ctrl``, ``act``, ``force``, ``length``, ``gear``, ``ctrlrange``, ...; for a
-    sensor ``sensordata``; for a mocap body ``mocap_pos`` and ``mocap_quat``.
+    `xpos`, `xmat`, `size`, `rgba`, `pos`, `friction`, ...; for a joint `qpos`,
+    `qvel`, `qfrc_actuator`, `range`, `axis`, `damping`, `armature`, ...; for an
+    actuator `ctrl`, `act`, `force`, `length`, `gear`, `ctrlrange`, ...; for a
+    sensor `sensordata`; for a mocap body `mocap_pos` and `mocap_quat`.
 
     For a single element, a field with one value per object reads as a NumPy scalar and a
-    field with k values as a (k,) view; fields addressed by position (``qpos``, dof fields,
-    ``sensordata``) read as arrays as wide as the element's share (4 for a ball joint's qpos,
+    field with k values as a (k,) view; fields addressed by position (`qpos`, dof fields,
+    `sensordata`) read as arrays as wide as the element's share (4 for a ball joint's qpos,
     3 for a 3-D sensor). For a list of n elements fields read as (n,) or (n, k) arrays, and
     position-addressed fields as the concatenation of each element's share. Arrays read from
-    a binding write through on item assignment (``binding.rgba[:, 3] = 0.5``); attribute
-    assignment (``binding.qpos = 0.3``) writes too. Arrays are reused between reads: copy
+    a binding write through on item assignment (`binding.rgba[:, 3] = 0.5`); attribute
+    assignment (`binding.qpos = 0.3`) writes too. Arrays are reused between reads: copy
     them to keep a value.
 
-    ``binding['pos']`` and ``binding['pos', ['x', 'z']]`` index by attribute name and, for
+    `binding['pos']` and `binding['pos', ['x', 'z']]` index by attribute name and, for
     fields with labelled columns (xyz, quaternions, rgba, rotation matrices), by column.
     """
 
@@ -167,11 +167,11 @@ class Binding:
         return object.__new__(_binding_class(family))
 
     def __init__(self, physics, namespace: str, named_index):
-        """Binds the objects of ``namespace`` named ``named_index`` (a name, or a list of
-        names, as in the compiled model) in ``physics``; ``physics.bind`` is the usual way.
+        """Binds the objects of `namespace` named `named_index` (a name, or a list of
+        names, as in the compiled model) in `physics`; `physics.bind` is the usual way.
 
         Raises:
-          ValueError: no MuJoCo fields for ``namespace``, or no object of that name.
+          ValueError: no MuJoCo fields for `namespace`, or no object of that name.
         """
         family = field_layout.FAMILIES[namespace]
         layout = physics._layout
@@ -275,7 +275,7 @@ class Binding:
         return ref
 
     def _build(self, name: str):
-        """Creates, caches and returns the (getter, setter) pair for attribute ``name``."""
+        """Creates, caches and returns the (getter, setter) pair for attribute `name`."""
         ref = self._ref(name)
         sim = self._sim
         array = getattr(sim.model if ref.struct == MODEL else sim.data, ref.name)
@@ -372,7 +372,7 @@ class Binding:
         return field_layout.compress(layout.multi_index(rule, self._ids))
 
     def _after_write(self, ref: field_layout.FieldRef, name: str):
-        """What a write to input field ``ref`` must do next; None when nothing."""
+        """What a write to input field `ref` must do next; None when nothing."""
         sim = self._sim
         if ref.name in sim.forward_neutral:
             return None
@@ -393,7 +393,7 @@ class Binding:
 
 
 def _convert_columns(columns, labels, field: str):
-    """Column labels ('x', ['x', 'z']) -> integer column indices for ``field``."""
+    """Column labels ('x', ['x', 'z']) -> integer column indices for `field`."""
     if isinstance(columns, str):
         columns_list, single = [columns], True
     elif isinstance(columns, (list, tuple)) and columns and isinstance(columns[0], str):
@@ -411,7 +411,7 @@ def _convert_columns(columns, labels, field: str):
 
 
 class EmptyBinding:
-    """What ``physics.bind([])`` returns: every attribute reads as an empty array."""
+    """What `physics.bind([])` returns: every attribute reads as an empty array."""
 
     __slots__ = ()
 
@@ -433,14 +433,14 @@ EMPTY_BINDING = EmptyBinding()
 
 
 def create(sim, layout: ModelLayout, root, elements, single: bool) -> Binding:
-    """A binding of ``elements`` (one element when ``single``) to the simulation ``sim``.
+    """A binding of `elements` (one element when `single`) to the simulation `sim`.
 
     Args:
-      sim: the physics' simulation state (``model``, ``data``, ``dirty``, ``forward()``).
-      layout: row look-ups for ``sim.model``.
-      root: the ``mjcf.RootElement`` compiled into ``sim.model``, or None when unknown.
+      sim: the physics' simulation state (`model`, `data`, `dirty`, `forward()`).
+      layout: row look-ups for `sim.model`.
+      root: the `mjcf.RootElement` compiled into `sim.model`, or None when unknown.
       elements: an element, or a tuple of elements of one family.
-      single: whether ``elements`` is one element.
+      single: whether `elements` is one element.
 
     Raises:
       ValueError: for elements with no compiled counterpart, of mixed families, or that
@@ -493,7 +493,7 @@ _BINDING_CLASSES = {}
 
 
 def _binding_class(family: Family) -> type:
-    """The Binding subclass with one class-level accessor per attribute of ``family``."""
+    """The Binding subclass with one class-level accessor per attribute of `family`."""
     cls = _BINDING_CLASSES.get(family.namespace)
     if cls is None:
         accessors = {name: _Field(name) for name in family.fields if not hasattr(Binding, name)}
@@ -529,7 +529,7 @@ def _object_id(layout: ModelLayout, family: Family, root, element) -> int:
 
 
 def _belongs(root, element, namespace: str, name: str) -> bool:
-    """Whether ``element`` is in ``root``'s tree or in a model attached below it."""
+    """Whether `element` is in `root`'s tree or in a model attached below it."""
     model = element.root
     if not hasattr(model, "parent_model"):
         return root.find(namespace, name) is element or any(

@@ -1,5 +1,5 @@
-"""``mjcf.Physics``: the engine ``Physics`` plus ``bind`` and the constructors from an
-``mjcf.RootElement``, as in dm_control."""
+"""`mjcf.Physics`: the engine `Physics` plus `bind` and the constructors from an
+`mjcf.RootElement`, as in dm_control."""
 
 import re
 
@@ -28,7 +28,7 @@ Binding = binding_module.Binding
 
 class _BindableSimulation(engine._Simulation):
     """The engine's simulation plus the MjModel fields whose writes through a binding leave
-    derived quantities valid (see ``mjcf.appearance``)."""
+    derived quantities valid (see `mjcf.appearance`)."""
 
     __slots__ = ("forward_neutral",)
 
@@ -40,9 +40,9 @@ class _BindableSimulation(engine._Simulation):
 class Physics(engine.Physics):
     """A compiled MJCF model with its simulation data, API-compatible with dm_control.
 
-    Everything of ``mujoco_physics.Physics`` (construction from XML, ``model``/``data``,
-    ``named``, stepping, state, rendering), plus ``from_mjcf_model`` and
-    ``bind(element)``, which gives the fields of MJCF elements as attributes.
+    Everything of `mujoco_physics.Physics` (construction from XML, `model`/`data`,
+    `named`, stepping, state, rendering), plus `from_mjcf_model` and
+    `bind(element)`, which gives the fields of MJCF elements as attributes.
     """
 
     _mjcf_model = None
@@ -58,7 +58,7 @@ class Physics(engine.Physics):
 
     @classmethod
     def from_mjcf_model(cls, mjcf_model) -> "Physics":
-        """Compiles an ``mjcf.RootElement`` (its XML and assets) into a new Physics.
+        """Compiles an `mjcf.RootElement` (its XML and assets) into a new Physics.
 
         Raises:
           ValueError: when MuJoCo rejects the model; the message names the offending
@@ -68,39 +68,39 @@ class Physics(engine.Physics):
 
     @classmethod
     def from_compiled_mjcf_model(cls, mjcf_model, model: mujoco.MjModel) -> "Physics":
-        """A Physics for ``model``, already compiled from ``mjcf_model`` (see
-        ``compile_mjcf_model``), so that ``bind`` accepts the elements of ``mjcf_model``."""
+        """A Physics for `model`, already compiled from `mjcf_model` (see
+        `compile_mjcf_model`), so that `bind` accepts the elements of `mjcf_model`."""
         physics = cls.__new__(cls)
         physics._mjcf_model = mjcf_model
         physics._reload_from_data(mujoco.MjData(model))
         return physics
 
     def reload_from_mjcf_model(self, mjcf_model) -> None:
-        """Recompiles this Physics from ``mjcf_model``, as ``from_mjcf_model`` would."""
+        """Recompiles this Physics from `mjcf_model`, as `from_mjcf_model` would."""
         model = compile_mjcf_model(mjcf_model)
         self._mjcf_model = mjcf_model
         self._reload_from_model(model)
 
     @property
     def is_dirty(self) -> bool:
-        """Whether a binding wrote an input since the last ``forward()``."""
+        """Whether a binding wrote an input since the last `forward()`."""
         return self._sim.dirty
 
     def mark_as_dirty(self) -> None:
-        """Makes the next read of a derived quantity through a binding run ``forward()``."""
+        """Makes the next read of a derived quantity through a binding run `forward()`."""
         self._sim.dirty = True
 
     def bind(self, mjcf_elements) -> Binding:
         """The MuJoCo fields of an MJCF element, or of a sequence of same-kind elements.
 
-        See ``mjcf.binding.Binding``. Bindings are cached: binding the same element, or an
+        See `mjcf.binding.Binding`. Bindings are cached: binding the same element, or an
         equal sequence of elements, again returns the same object.
 
         Returns:
-          A ``Binding``; an empty binding for an empty sequence.
+          A `Binding`; an empty binding for an empty sequence.
 
         Raises:
-          ValueError: ``mjcf_elements`` is None, an element is not part of the model
+          ValueError: `mjcf_elements` is None, an element is not part of the model
             compiled into this Physics or is not compiled into a MuJoCo object, or the
             elements are of mixed kinds (mocap and other bodies count as different kinds).
         """
@@ -147,7 +147,7 @@ class Physics(engine.Physics):
         return model_patch.patch_model(self, self._layout, changes)
 
     def __getstate__(self) -> dict:
-        """What pickling (and ``copy.deepcopy``) keeps: the model and data, with the MJCF
+        """What pickling (and `copy.deepcopy`) keeps: the model and data, with the MJCF
         model compiled into them; bindings and renderers are rebuilt on use."""
         return dict(super().__getstate__(), mjcf_model=self._mjcf_model)
 
@@ -156,13 +156,13 @@ class Physics(engine.Physics):
         super().__setstate__(state)
 
     def free(self) -> None:
-        """Releases renderers, bindings and MuJoCo structures (see the engine's ``free``)."""
+        """Releases renderers, bindings and MuJoCo structures (see the engine's `free`)."""
         self._bindings = {}
         super().free()
 
 
 def compile_mjcf_model(mjcf_model) -> mujoco.MjModel:
-    """Compiles an ``mjcf.RootElement`` into a ``mujoco.MjModel``.
+    """Compiles an `mjcf.RootElement` into a `mujoco.MjModel`.
 
     Raises:
       ValueError: when MuJoCo rejects the model, naming the offending element.

@@ -8,9 +8,6 @@ import pytest
 
 ROOT = pathlib.Path(__file__).resolve().parents[1]
 PACKAGES = ("mujoco_physics", "mjcf", "composer", "manipulation")
-# Still written with RST while other changes to them are open; converted after those land
-# (issue 25, item 6).
-NOT_YET_CONVERTED = frozenset(("mjcf/binding.py", "mjcf/physics.py"))
 
 # What RST writes differently: ``literal`` (Markdown: `literal`), :role:`target`,
 # `.. directive::`, a literal block introduced by a line ending in '::', and the rule lines
@@ -56,7 +53,7 @@ def test_rst_markup_is_recognised_and_markdown_is_not():
 
 @pytest.mark.parametrize(
     "path",
-    [p for p in _modules() if p.relative_to(ROOT).as_posix() not in NOT_YET_CONVERTED],
+    _modules(),
     ids=lambda p: p.relative_to(ROOT).as_posix(),
 )
 def test_docstrings_use_markdown(path):
