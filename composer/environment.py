@@ -14,6 +14,7 @@ import mjcf
 from composer import observation
 from composer.action_validation import action_validator
 from composer.hooks import HOOK_NAMES, EnvironmentHooks
+from composer.utils import argument_checks
 from composer.weak_physics import WeakPhysics
 from mjcf.physics import compile_mjcf_model
 from mujoco_physics.model_snapshot import ModelSnapshot, snapshots_supported
@@ -40,12 +41,6 @@ class ObservationPadding(enum.Enum):
 
     INITIAL_VALUE = -1
     ZERO = 0
-
-
-def _positive_int(name: str, value) -> int:
-    if isinstance(value, bool) or not isinstance(value, numbers.Integral) or value < 1:
-        raise ValueError(f"{name}: expected an integer >= 1, got {value!r}")
-    return int(value)
 
 
 def _time_limit_warning(time_limit: float, control_timestep: float) -> str | None:
@@ -163,11 +158,11 @@ class Environment(dm_env.Environment):
         else:
             self._random_state = np.random.RandomState(random_state)
         self._overridden_n_sub_steps = (
-            None if n_sub_steps is None else _positive_int("n_sub_steps", n_sub_steps)
+            None if n_sub_steps is None else argument_checks.integer(n_sub_steps=n_sub_steps)
         )
         self._raise_exception_on_physics_error = raise_exception_on_physics_error
         self._strip_singleton_obs_buffer_dim = strip_singleton_obs_buffer_dim
-        self._max_reset_attempts = _positive_int("max_reset_attempts", max_reset_attempts)
+        self._max_reset_attempts = argument_checks.integer(max_reset_attempts=max_reset_attempts)
         self._recompile_mjcf_every_episode = recompile_mjcf_every_episode
         self._pad_with_initial_value = (
             delayed_observation_padding is ObservationPadding.INITIAL_VALUE
