@@ -3,8 +3,9 @@
 Contract of the adapter (`GymnasiumEnv`):
 
 - `observation_space` and `action_space` come from the wrapped environment's specs
-  (see `composer.gym.spaces`): observations are the wrapped environment's own dict of
-  arrays, unchanged, or with `flatten_observations` one `Box` of every feature.
+  (see `composer.gym.spec_spaces`): observations are the wrapped environment's own dict
+  of arrays, unchanged, or with `flatten_observations` as `spec_spaces.FlatObservations`
+  packs them (one `Box` of every feature, images kept apart).
 - `observation_space` follows the wrapped environment's observation spec at every
   `reset`: observables enabled, disabled or reconfigured after wrapping (which a
   `composer.Environment` applies at its next reset) change it there, never mid-episode.
@@ -27,7 +28,7 @@ import dm_env
 import gymnasium
 import numpy as np
 
-from composer.gym import spaces as spec_spaces
+from composer.gym import spec_spaces
 
 __all__ = ["GymnasiumEnv"]
 
@@ -244,22 +245,11 @@ class GymnasiumEnv(gymnasium.Env):
             return
         self._observation_signature = signature
         if self._flatten:
-            self._layout = spec_spaces.feature_layout(observation_spec)
-            self.observation_space = spec_spaces.flat_space(observation_spec, self._layout)
+            self._flat = spec_spaces.FlatObservations(observation_spec)
+            self.observation_space = self._flat.space
         else:
-            self._layout = None
+            self._flat = None
             self.observation_space = spec_spaces.space_from_spec(observation_spec)
 
     def _observation(self, observation):
-        layout = self._layout
-        if layout is None:
-            return observation
-        if layout.names and not layout.images:
-            return np.concatenate([observation[name].ravel() for name in layout.names])
-        # Images, or nothing at all: a dict, as `spaces.flat_space` describes it.
-        flat = {}
-        if layout.names:
-            flat["features"] = np.concatenate([observation[name].ravel() for name in layout.names])
-        for name in layout.images:
-            flat[name] = observation[name]
-        return flat
+        return observation if self._flat is None else self._flat(observation)

@@ -28,8 +28,10 @@ _README = _HERE.parents[2] / "README.md"
 @pytest.fixture(scope="module")
 def ray():
     ray = pytest.importorskip("ray", reason="Ray is not installed (pip install -e '.[ray]')")
-    # The actors' processes import gym_scene (pickled by reference) from this folder.
+    # The actors' processes import gym_scene (pickled by reference) from this folder. A
+    # new local Ray ("local"), whatever a killed earlier run left behind.
     ray.init(
+        address="local",
         num_cpus=2,
         include_dashboard=False,
         runtime_env={"env_vars": {"PYTHONPATH": str(_HERE)}},
@@ -243,5 +245,5 @@ def test_close_kills_every_actor_and_frees_their_cpus(ray, closing):
     while ray.available_resources().get("CPU", 0) < 2 and time.monotonic() < deadline:
         time.sleep(0.1)
     assert ray.available_resources().get("CPU", 0) == 2
-    with pytest.raises(RuntimeError, match="closed"):
+    with pytest.raises(gymnasium.error.ClosedEnvironmentError, match="closed"):
         envs.actors  # noqa: B018
