@@ -437,10 +437,11 @@ class RayVectorEnv(BatchedVectorEnv):
         return (
             f"RayVectorEnv: the Ray actors of {self._sub_envs_of(actors)} did not start "
             f"within start_timeout={self.start_timeout:g} s; each needs "
-            f"{self.num_cpus_per_actor:g} CPU on one node, and the cluster has {free:g} of "
-            f"{total:g} CPUs free on {nodes} live node(s). Free CPUs or add a node, pass a "
-            "smaller num_cpus_per_actor, or a longer start_timeout if building the "
-            "sub-environments is slow. The vector env is closed."
+            f"{self.num_cpus_per_actor:g} CPU on one node, and the cluster reports {free:g} "
+            f"of {total:g} CPUs free on {nodes} live node(s). Free CPUs or add a node, or "
+            "pass a smaller num_cpus_per_actor; if the cluster is gone (a raylet died), start "
+            "a new one; if building the sub-environments is slow, pass a longer "
+            "start_timeout. The vector env is closed."
         )
 
     def _call_timeout_message(self, actors: list[int]) -> str:
@@ -452,10 +453,15 @@ class RayVectorEnv(BatchedVectorEnv):
         )
 
     def _sub_envs_of(self, actors: list[int]) -> str:
-        return ", ".join(
-            f"sub-environments {self.indices_of(k).start} to {self.indices_of(k).stop - 1}"
-            for k in actors
-        )
+        named = []
+        for k in actors:
+            first, last = self.indices_of(k)[0], self.indices_of(k)[-1]
+            named.append(
+                f"sub-environment {first}"
+                if first == last
+                else f"sub-environments {first} to {last}"
+            )
+        return ", ".join(named)
 
     def _replace(self, actor: int) -> None:
         """Replaces dead actor number `actor` by a new one with new sub-environments.
