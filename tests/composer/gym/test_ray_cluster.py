@@ -90,33 +90,41 @@ def _wait_for_free_cpus(ray, cpus):
     return ray.available_resources().get("CPU", 0)
 
 
-def test_actors_spread_over_nodes_and_a_removed_node_s_actor_restarts_on_the_other(
+def test_actors_spread_over_nodes_and_a_removed_node_s_actors_restart_on_the_other(
     ray, make_cluster
 ):
     cluster = make_cluster(cpus_per_worker=2)
-    envs = RayVectorEnv(_counters([6, 6, 6, 6]), envs_per_actor=2, **_TIMEOUTS)
+    # Four actors of a quarter CPU would all fit on one node: spreading is a choice.
+    envs = RayVectorEnv(
+        _counters([6, 6, 6, 6]), envs_per_actor=1, num_cpus_per_actor=0.25, **_TIMEOUTS
+    )
     try:
-        workers = {node.node_id for node in cluster.worker_nodes}
         placed = [_node_of(ray, actor) for actor in envs.actors]
-        assert set(placed) == workers
+        assert sorted(placed.count(node.node_id) for node in cluster.worker_nodes) == [2, 2]
         zeros = np.zeros((4, 1))
         envs.reset(seed=0)
         envs.step(zeros)
-        cluster.remove_node(_worker_node(cluster, placed[1]))
+        removed = placed[3]
+        lost = [k for k, node in enumerate(placed) if node == removed]
+        survivor = next(node for node in placed if node != removed)
+        cluster.remove_node(_worker_node(cluster, removed))
         observations, rewards, terminated, truncated, infos = envs.step(zeros)
-        # Actor 0's sub-envs lose nothing; actor 1's end with their last observation.
-        assert observations[:, 0].tolist() == [2, 102, 201, 301]
-        assert rewards.tolist() == [2, 2, 0, 0]
+        # The other node's sub-envs lose nothing; the lost ones end with their last
+        # observation.
+        kept = [k for k in range(4) if k not in lost]
+        assert observations[kept, 0].tolist() == [100 * k + 2 for k in kept]
+        assert observations[lost, 0].tolist() == [100 * k + 1 for k in lost]
+        assert rewards.tolist() == [0.0 if k in lost else 2.0 for k in range(4)]
         assert terminated.tolist() == [False] * 4
-        assert truncated.tolist() == [False, False, True, True]
-        assert infos["_restarted"].tolist() == [False, False, True, True]
-        assert envs.restarts == [0, 1]
-        assert _node_of(ray, envs.actors[1]) == placed[0]
+        assert truncated.tolist() == [k in lost for k in range(4)]
+        assert infos["_restarted"].tolist() == [k in lost for k in range(4)]
+        assert envs.restarts == [int(k in lost) for k in range(4)]
+        assert [_node_of(ray, actor) for actor in envs.actors] == [survivor] * 4
         # The run goes on: the new sub-envs start new episodes (a new CounterEnv at 0).
         observations, *_ = envs.step(zeros)
-        assert observations[:, 0].tolist() == [3, 103, 0, 0]
+        assert observations[:, 0].tolist() == [0 if k in lost else 100 * k + 3 for k in range(4)]
         observations, *_ = envs.step(zeros)
-        assert observations[:, 0].tolist() == [4, 104, 1, 1]
+        assert observations[:, 0].tolist() == [1 if k in lost else 100 * k + 4 for k in range(4)]
         actors = envs.actors
     finally:
         envs.close()
