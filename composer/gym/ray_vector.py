@@ -30,7 +30,8 @@ Bounded waits. Starting an actor (Ray placing it on a node, then it building its
 sub-environments) may take at most `start_timeout` seconds, and every call at most
 `call_timeout`; past either, the vector env kills its actors, closes itself and raises
 `TimeoutError` saying what it waited for. That is what happens when a dead actor cannot be
-placed again (no node has the CPUs it needs) or when the cluster is gone (its raylet died).
+placed again (no node has the CPUs it needs) or when the cluster is gone (its raylet died);
+an actor that dies while starting raises `RuntimeError`, the vector env closed likewise.
 """
 
 import functools
@@ -38,7 +39,7 @@ import math
 import numbers
 import time
 from collections.abc import Callable, Sequence
-from typing import Any, NamedTuple
+from typing import Any, NamedTuple, NoReturn
 
 import gymnasium
 from gymnasium.vector import AutoresetMode
@@ -240,6 +241,7 @@ class RayVectorEnv(BatchedVectorEnv):
           SubEnvironmentError: for the lowest index whose factory raised.
           ValueError: for spaces that differ from the first sub-environment's.
           TimeoutError: if an actor did not start within `start_timeout`.
+          RuntimeError: if an actor died while starting (the vector env is closed).
         """
         options = {"num_cpus": self.num_cpus_per_actor, "scheduling_strategy": "SPREAD"}
         threads = min(self.envs_per_actor, max(1, math.floor(self.num_cpus_per_actor)))
@@ -253,7 +255,16 @@ class RayVectorEnv(BatchedVectorEnv):
         replies = self._wait(pending, self.start_timeout, self._start_timeout_message)
         failures = {}
         for k in actors:
-            reply = self._ray.get(replies[k])
+            try:
+                reply = self._ray.get(replies[k])
+            except self._ray.exceptions.RayActorError as error:
+                self._give_up(
+                    RuntimeError(
+                        f"RayVectorEnv: the Ray actor of {self._sub_envs_of([k])} died while "
+                        f"starting ({type(error).__name__}): its node may be gone, or the "
+                        "cluster (a raylet died). The vector env is closed."
+                    )
+                )
             if isinstance(reply, HostSpec):
                 self._check_spec(k, reply)
             else:
@@ -424,7 +435,10 @@ class RayVectorEnv(BatchedVectorEnv):
         if not not_ready:
             return pending
         late = [k for k, reference in pending.items() if reference in not_ready]
-        error = TimeoutError(message(late))
+        self._give_up(TimeoutError(message(late)))
+
+    def _give_up(self, error: Exception) -> NoReturn:
+        """Kills the actors, closes the vector env and raises `error`."""
         self._kill_actors()
         self.closed = True
         raise error

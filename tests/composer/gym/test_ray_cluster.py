@@ -184,8 +184,11 @@ def test_steps_after_the_local_raylet_died_raise_timeout_error_within_the_bounds
     try:
         envs.reset(seed=0)
         local_ray._private.worker.global_worker.node.kill_raylet()
-        # The actors may answer a few more steps before Ray notices that they are gone.
-        with pytest.raises(TimeoutError, match="did not start within start_timeout=3 s|no reply"):
+        # The actors may answer a few more steps before Ray notices that they are gone;
+        # then, by how far Ray got, a replacement never starts, dies starting, or a call
+        # gets no reply.
+        expected = "did not start within start_timeout=3 s|died while starting|no reply within"
+        with pytest.raises((TimeoutError, RuntimeError), match=expected):
             for _ in range(1000):
                 envs.step(np.zeros((2, 1)))
                 time.sleep(0.05)
