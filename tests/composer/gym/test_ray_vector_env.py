@@ -174,6 +174,22 @@ def test_a_killed_actor_in_same_step_mode_returns_reset_and_final_observations(r
     assert infos["restarted"][0]
 
 
+def test_a_masked_reset_after_an_actor_died_also_resets_its_other_sub_env(ray, closing):
+    envs = closing(RayVectorEnv(_counters([5, 5, 5, 5]), envs_per_actor=2))
+    zeros = np.zeros((4, 1))
+    envs.reset(seed=0)
+    envs.step(zeros)
+    _kill(ray, envs.actors[1])
+    # Sub-env 2 is reset with seed 1 + 2; sub-env 3, new and outside the mask, without one
+    # (a new CounterEnv's first unseeded episode starts at 0).
+    mask = np.array([False, False, True, False])
+    observations, infos = envs.reset(seed=1, options={"reset_mask": mask})
+    assert observations[:, 0].tolist() == [1, 101, 300, 0]
+    assert infos["_restarted"].tolist() == [False, False, True, True]
+    observations, *_ = envs.step(zeros)
+    assert observations[:, 0].tolist() == [2, 102, 301, 1]
+
+
 def test_an_actor_that_dies_more_than_max_restarts_times_raises(ray, closing):
     envs = closing(RayVectorEnv(_counters([5, 5]), envs_per_actor=2, max_restarts=0))
     envs.reset(seed=0)
