@@ -254,10 +254,9 @@ def test_without_render_mode_render_returns_none():
     assert env.render() is None
 
 
-def test_human_render_mode_is_not_available_yet():
-    assert GymnasiumEnv.metadata["render_modes"] == ["rgb_array", "depth_array"]
-    with pytest.raises(NotImplementedError, match="viewer"):
-        GymnasiumEnv(slider_environment(), render_mode="human")
+def test_metadata_lists_human_and_the_off_screen_render_modes():
+    # The window itself is tested under Xvfb in test_gym_human_render.py.
+    assert GymnasiumEnv.metadata["render_modes"] == ["human", "rgb_array", "depth_array"]
 
 
 def test_unknown_render_mode_is_rejected_naming_it():
