@@ -34,6 +34,7 @@ machine run it under Xvfb. Closing the window ends `launch`.
 
 from __future__ import annotations
 
+import atexit
 import math
 import numbers
 import threading
@@ -180,7 +181,8 @@ class PassiveWindow:
     One window per process: MuJoCo's passive viewer crashes the process (on Linux, a
     segmentation fault) when two run at once, each with its own GLFW thread. Opening a
     `PassiveWindow` therefore closes the one open before it, which reopens at its next
-    `handle_for` (so two windows drawn in turn keep swapping).
+    `handle_for` (so two windows drawn in turn keep swapping). A window left open is
+    closed when the interpreter exits (for the same reason).
 
     Args:
       title: the window's title.
@@ -217,6 +219,8 @@ class PassiveWindow:
                 _open_passive_window.close()
             self._window = _open_window(physics, self._controls, self._show_ui, self._look)
             _open_passive_window = self
+            # A viewer thread still running when the interpreter exits crashes it.
+            atexit.register(self.close)
         return self._window.handle
 
     def is_running(self) -> bool:
@@ -228,6 +232,7 @@ class PassiveWindow:
         global _open_passive_window
         if self._window is not None:
             window, self._window = self._window, None
+            atexit.unregister(self.close)
             _close_window(window)
         if _open_passive_window is self:
             _open_passive_window = None

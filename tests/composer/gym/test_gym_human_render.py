@@ -104,6 +104,27 @@ def test_human_mode_shows_a_window_of_the_given_size_until_close(display, tmp_pa
     assert seen["threads_left"] == 0
 
 
+def test_a_human_window_left_open_is_closed_at_exit_without_crashing(display, tmp_path):
+    # MuJoCo's viewer thread, still running at interpreter exit, crashes the process.
+    seen = _run(
+        display,
+        tmp_path,
+        """
+        import numpy as np
+        import composer
+        from composer.gym import GymnasiumEnv
+        from gym_scene import SliderTask
+
+        env = GymnasiumEnv(composer.Environment(SliderTask()), render_mode="human")
+        env.reset(seed=0)
+        env.step(np.ones(1))
+        print(json.dumps("left open"))
+        """,
+        timeout=60,
+    )
+    assert seen == "left open"
+
+
 def test_every_task_passes_gymnasiums_env_checker_in_human_mode(display, tmp_path):
     # The checker also makes each task again in every listed render mode and renders it:
     # small images keep the off-screen ones fast.
