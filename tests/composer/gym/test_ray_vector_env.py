@@ -122,6 +122,20 @@ def test_make_vec_with_backend_ray_matches_the_threads_backend(ray, closing):
         assert _bits(got) == _bits(expected)
 
 
+def test_make_vec_passes_the_ray_timeouts_on(ray, closing):
+    envs = closing(
+        gymnasium.make_vec(
+            "composer/reach_site_features-v0",
+            num_envs=1,
+            vectorization_mode="vector_entry_point",
+            backend="ray",
+            start_timeout=30,
+            call_timeout=45,
+        )
+    )
+    assert (envs.start_timeout, envs.call_timeout) == (30.0, 45.0)
+
+
 def test_a_registered_id_is_made_with_gymnasium_make_in_the_actors(ray, closing):
     envs = closing(RayVectorEnv("composer/reach_site_features-v0", num_envs=2, envs_per_actor=2))
     assert len(envs.actors) == 1
