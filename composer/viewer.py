@@ -39,6 +39,7 @@ import math
 import numbers
 import threading
 import time
+import warnings
 from collections.abc import Callable
 from typing import TYPE_CHECKING, Any, NamedTuple
 
@@ -141,7 +142,22 @@ class _Window(NamedTuple):
     data: mujoco.MjData
 
 
+def _check_display() -> None:
+    """Raises RuntimeError if GLFW cannot start here; MuJoCo's viewer would instead end the
+    process (its C error handler exits) when it cannot initialise GLFW."""
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        started = glfw.init()
+    if not started:
+        reasons = "; ".join(str(warning.message) for warning in caught) or "no reason given"
+        raise RuntimeError(
+            f"the viewer window cannot open: GLFW could not initialise ({reasons}). It needs "
+            "a display: on a headless machine run under Xvfb (xvfb-run python ...)"
+        )
+
+
 def _open_window(physics, controls: Controls, show_ui: bool, look: _WindowLook) -> _Window:
+    _check_display()
     # launch_passive runs the window in a thread it does not hand out; it is the one thread
     # it adds, and joining it after close() lets GLFW tear down before the process exits.
     before = set(threading.enumerate())

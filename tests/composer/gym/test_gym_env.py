@@ -299,15 +299,6 @@ def test_every_manipulation_task_passes_gymnasiums_env_checker(name):
         check_env(env, skip_render_check=True)
 
 
-def test_rendering_env_passes_gymnasiums_env_checker_with_its_render_check():
-    env = gymnasium.make(
-        "composer/reach_site_features-v0", render_mode="rgb_array", width=32, height=24
-    )
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore", UserWarning)
-        check_env(env.unwrapped)
-
-
 def test_flattening_a_task_without_observations_gives_empty_dict_observations():
     class Unobserved(SliderTask):
         @property

@@ -22,8 +22,8 @@ _REPO = _HERE.parents[2]
 
 
 def _run(display, tmp_path, body, timeout):
-    """Runs `body` (Python) with this checkout and gym_scene importable, under `display`;
-    returns what it printed as JSON."""
+    """Runs `body` (Python) with this checkout and gym_scene importable, under `display`
+    (None: without one); returns what it printed as JSON."""
     script = tmp_path / "human_render.py"
     script.write_text(
         "import json, os, subprocess, sys, warnings\n"
@@ -32,7 +32,11 @@ def _run(display, tmp_path, body, timeout):
     result = subprocess.run(
         [sys.executable, str(script)],
         cwd=_REPO,
-        env=dict(os.environ, DISPLAY=display, MUJOCO_GL="glfw"),
+        env={
+            **{k: v for k, v in os.environ.items() if k not in ("DISPLAY", "WAYLAND_DISPLAY")},
+            **({} if display is None else {"DISPLAY": display}),
+            "MUJOCO_GL": "glfw",
+        },
         capture_output=True,
         text=True,
         timeout=timeout,
@@ -125,9 +129,33 @@ def test_a_human_window_left_open_is_closed_at_exit_without_crashing(display, tm
     assert seen == "left open"
 
 
+def test_human_mode_without_a_display_raises_instead_of_ending_the_process(tmp_path):
+    seen = _run(
+        None,
+        tmp_path,
+        """
+        import composer
+        from composer.gym import GymnasiumEnv
+        from gym_scene import SliderTask
+
+        env = GymnasiumEnv(composer.Environment(SliderTask()), render_mode="human")
+        try:
+            env.reset(seed=0)
+        except RuntimeError as error:
+            print(json.dumps(str(error)))
+        """,
+        timeout=60,
+    )
+    assert seen.startswith("the viewer window cannot open: GLFW could not initialise (")
+    assert seen.endswith(
+        "It needs a display: on a headless machine run under Xvfb (xvfb-run python ...)"
+    )
+
+
 def test_every_task_passes_gymnasiums_env_checker_in_human_mode(display, tmp_path):
-    # The checker also makes each task again in every listed render mode and renders it:
-    # small images keep the off-screen ones fast.
+    # The checker also makes each task again in every listed render mode and renders it
+    # (this is where 'rgb_array' and 'depth_array' pass its render checks): small images
+    # keep the off-screen ones fast.
     results = _run(
         display,
         tmp_path,
