@@ -104,11 +104,11 @@ def _check_seconds(name: str, value: Any) -> None:
 
 
 class _Gathered(NamedTuple):
-    """What one call on the actors brought back.
+    """What a call on the actors brought back.
 
     `results` maps each sub-environment index whose actor replied to its result; `lost`
-    lists every sub-environment of the actors that died during the call (they are
-    replaced already, with new sub-environments that have run nothing yet).
+    lists every sub-environment of the actors that died during the call, which are
+    replaced already, with new sub-environments.
     """
 
     results: dict[int, Any]
@@ -284,8 +284,7 @@ class RayVectorEnv(BatchedVectorEnv):
         arguments: dict[int, tuple],
         store: Callable[[int, Any], None] | None = None,
     ) -> dict[int, Any]:
-        results, _ = self._run(function, arguments, store)
-        return results
+        return self._run(function, arguments, store).results
 
     def _reset_sub_envs(self, arguments: dict[int, tuple]) -> dict[int, SubEnvOutcome]:
         outcomes, restarted = self._run(reset_sub_env, arguments, self._store, every_lost=True)
@@ -306,7 +305,7 @@ class RayVectorEnv(BatchedVectorEnv):
         # `_episode_over` still holds the lost rows' state from before this step.
         due = {i for i in lost if self._episode_over[i]}
         to_reset = set(lost) if same_step else due
-        resets, _ = self._run(reset_sub_env, dict.fromkeys(sorted(to_reset), (None, None)))
+        resets = self._run(reset_sub_env, dict.fromkeys(sorted(to_reset), (None, None))).results
         outcomes = {}
         for i in lost:
             last_observation = read_row(self._observations, i)
@@ -341,13 +340,13 @@ class RayVectorEnv(BatchedVectorEnv):
         store: Callable[[int, Any], None] | None = None,
         *,
         every_lost: bool = False,
-    ) -> tuple[dict[int, Any], set[int]]:
+    ) -> _Gathered:
         """Runs `function` on the listed sub-environments, again on restarted ones.
 
         Returns:
-          The results by index, and the indices of the sub-environments that were
-          restarted meanwhile. With `every_lost`, those outside `arguments` (the dead
-          actors' other sub-environments) run too, with the arguments (None, None).
+          Every result, and in `lost` all the sub-environments restarted meanwhile. With
+          `every_lost`, those outside `arguments` (the dead actors' other
+          sub-environments) run too, with the arguments (None, None).
         """
         results, lost = self._transport(function, arguments, store)
         restarted: set[int] = set()
@@ -358,7 +357,7 @@ class RayVectorEnv(BatchedVectorEnv):
             }
             more, lost = self._transport(function, again, store)
             results.update(more)
-        return results, restarted
+        return _Gathered(results, tuple(sorted(restarted)))
 
     def _transport(
         self,
