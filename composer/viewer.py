@@ -35,9 +35,11 @@ machine run it under Xvfb. Closing the window ends `launch`.
 
 from __future__ import annotations
 
+import atexit
 import math
 import threading
 import time
+import warnings
 from collections.abc import Callable
 from typing import TYPE_CHECKING, NamedTuple
 
@@ -135,7 +137,22 @@ class _Window(NamedTuple):
     data: mujoco.MjData
 
 
+def _check_display() -> None:
+    """Raises RuntimeError if GLFW cannot start here; MuJoCo's viewer would instead end the
+    process (its C error handler exits) when it cannot initialise GLFW."""
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        started = glfw.init()
+    if not started:
+        reasons = "; ".join(str(warning.message) for warning in caught) or "no reason given"
+        raise RuntimeError(
+            f"the viewer window cannot open: GLFW could not initialise ({reasons}). It needs "
+            "a display: on a headless machine run under Xvfb (xvfb-run python ...)"
+        )
+
+
 def _open_window(physics, controls: Controls, show_ui: bool, look: _WindowLook) -> _Window:
+    _check_display()
     # launch_passive runs the window in a thread it does not hand out; it is the one thread
     # it adds, and joining it after close() lets GLFW tear down before the process exits.
     before = set(threading.enumerate())
@@ -163,6 +180,77 @@ def _open_window(physics, controls: Controls, show_ui: bool, look: _WindowLook) 
 def _close_window(window: _Window) -> None:
     window.handle.close()
     window.thread.join()
+
+
+class PassiveWindow:
+    """A viewer window that shows a physics stepped by someone else (`launch` steps its own).
+
+    `handle_for(physics)` opens the window on its first call, and again on a new physics
+    (after a recompile changed the model's structure); the caller draws with
+    `handle_for(physics).sync()`. `close()` closes the window and joins its thread.
+
+    One window per process: MuJoCo's passive viewer crashes the process (on Linux, a
+    segmentation fault) when two run at once, each with its own GLFW thread. Opening a
+    `PassiveWindow` therefore closes the one open before it, which reopens at its next
+    `handle_for` (so two windows drawn in turn keep swapping). A window left open is
+    closed when the interpreter exits (for the same reason).
+
+    Args:
+      title: the window's title.
+      width: the window's width in screen pixels.
+      height: the window's height in screen pixels.
+      controls: the `Controls` its keys go to (a fresh one by default).
+      show_ui: show MuJoCo's left and right settings panels.
+
+    Raises:
+      ValueError: naming `title`, `width` or `height` when bad.
+    """
+
+    def __init__(
+        self,
+        *,
+        title: str = "Explorer",
+        width: int = 1024,
+        height: int = 768,
+        controls: Controls | None = None,
+        show_ui: bool = False,
+    ):
+        self._look = _window_look(title, width, height)
+        self._controls = Controls() if controls is None else controls
+        self._show_ui = show_ui
+        self._window: _Window | None = None
+
+    def handle_for(self, physics) -> mujoco.viewer.Handle:
+        """The viewer handle showing `physics` (whose ``data.ptr`` is a ``mujoco.MjData``)."""
+        if self._window is not None and physics.data.ptr is not self._window.data:
+            self.close()
+        if self._window is None:
+            global _open_passive_window
+            if _open_passive_window is not None:
+                _open_passive_window.close()
+            self._window = _open_window(physics, self._controls, self._show_ui, self._look)
+            _open_passive_window = self
+            # A viewer thread still running when the interpreter exits crashes it.
+            atexit.register(self.close)
+        return self._window.handle
+
+    def is_running(self) -> bool:
+        """False once the window was closed (by the user or by `close`), or never opened."""
+        return self._window is not None and self._window.handle.is_running()
+
+    def close(self) -> None:
+        """Closes the window, if open."""
+        global _open_passive_window
+        if self._window is not None:
+            window, self._window = self._window, None
+            atexit.unregister(self.close)
+            _close_window(window)
+        if _open_passive_window is self:
+            _open_passive_window = None
+
+
+# The one `PassiveWindow` whose window is open in this process, if any.
+_open_passive_window: PassiveWindow | None = None
 
 
 class _StatusDisplay:
@@ -246,7 +334,9 @@ def launch(
     max_steps = argument_checks.integer(or_none=True, max_steps=max_steps)
     if policy is not None and not callable(policy):
         raise ValueError(f"policy: expected a callable TimeStep -> action or None, got {policy!r}")
-    look = _window_look(title, width, height)
+    window = PassiveWindow(
+        title=title, width=width, height=height, controls=controls, show_ui=show_ui
+    )
     environment = _load_environment(environment_loader)
     display = _StatusDisplay()
 
@@ -257,19 +347,17 @@ def launch(
     tally = EpisodeTally()
     tally.start_episode()
     status = ViewerStatus(0, 1, 0, None, 0.0, controls.speed, controls.paused)
-    window = _open_window(environment.physics, controls, show_ui, look)
+    handle = window.handle_for(environment.physics)
     try:
         deadline = time.perf_counter()
-        while window.handle.is_running() and (max_steps is None or tally.steps < max_steps):
+        while window.is_running() and (max_steps is None or tally.steps < max_steps):
             stepped = False
             if controls.take_reset() or timestep.last():
                 timestep = environment.reset()
                 default_action = _default_action(environment.action_spec())
                 tally.start_episode()
-                if environment.physics.data.ptr is not window.data:
-                    # A recompile changed the model's structure: show the new Physics.
-                    _close_window(window)
-                    window = _open_window(environment.physics, controls, show_ui, look)
+                # A recompile that changed the model's structure reopens on the new Physics.
+                handle = window.handle_for(environment.physics)
             elif controls.take_step():
                 action = default_action if policy is None else policy(timestep)
                 timestep = environment.step(action)
@@ -284,14 +372,14 @@ def launch(
                 speed=controls.speed,
                 paused=controls.paused,
             )
-            display.show(window.handle, status)
-            window.handle.sync()
+            display.show(handle, status)
+            handle.sync()
             if on_refresh is not None:
-                on_refresh(window.handle, status)
+                on_refresh(handle, status)
             period = control_timestep / controls.speed if stepped else _PAUSED_REFRESH
             deadline = _sleep_until(deadline + period)
     finally:
-        _close_window(window)
+        window.close()
     return status
 
 

@@ -62,6 +62,8 @@ def make_vector_env(
     envs_per_actor: int | None = None,
     num_cpus_per_actor: float | None = None,
     max_restarts: int | None = None,
+    start_timeout: float | None = None,
+    call_timeout: float | None = None,
     autoreset_mode: AutoresetMode | str = AutoresetMode.NEXT_STEP,
     copy: bool = True,
     device: str | None = None,
@@ -72,7 +74,8 @@ def make_vector_env(
     Args:
       backend: "threads" for a `ThreadedVectorEnv` (takes `num_threads`), "ray" for a
         `RayVectorEnv` (takes `address`, `envs_per_actor`, `num_cpus_per_actor`,
-        `max_restarts`, defaults as there; needs the extra `[ray]`).
+        `max_restarts`, `start_timeout`, `call_timeout`, defaults as there; needs the
+        extra `[ray]`).
         "warp" for a `WarpVectorEnv`: all worlds on one MuJoCo Warp `device` ("cpu" by
         default, or "cuda:0"); kwargs go to `composer.batch.BatchEnvironment`.
       autoreset_mode, copy: passed to either.
@@ -86,7 +89,8 @@ def make_vector_env(
 
         others = dict(num_threads=num_threads, address=address, envs_per_actor=envs_per_actor)
         given = [name for name, value in others.items() if value is not None]
-        if given or num_cpus_per_actor is not None or max_restarts is not None:
+        ray_only = (num_cpus_per_actor, max_restarts, start_timeout, call_timeout)
+        if given or any(value is not None for value in ray_only):
             raise ValueError(f"{(given or ['a Ray option'])[0]}: not an option of backend='warp'")
         return batch.make_vector_env(environment_name, num_envs, device, autoreset_mode, **kwargs)
     if device is not None:
@@ -99,6 +103,8 @@ def make_vector_env(
         "envs_per_actor": envs_per_actor,
         "num_cpus_per_actor": num_cpus_per_actor,
         "max_restarts": max_restarts,
+        "start_timeout": start_timeout,
+        "call_timeout": call_timeout,
     }
     if backend == "threads":
         given = [name for name, value in ray_options.items() if value is not None]

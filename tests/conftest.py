@@ -1,5 +1,37 @@
-"""Test-wide set-up: headless rendering through EGL unless the user chose a backend."""
+"""Test-wide set-up: headless rendering through EGL unless the user chose a backend, and a
+virtual X display for the tests that open windows."""
 
 import os
+import shutil
+import subprocess
+
+import pytest
 
 os.environ.setdefault("MUJOCO_GL", "egl")
+
+# The virtual screen's size: the viewer's default window (1024x768) fills it.
+SCREEN = (1024, 768)
+
+
+@pytest.fixture(scope="session")
+def display():
+    """Starts Xvfb on a display number it picks itself; yields ':N'. Skips without Xvfb."""
+    if shutil.which("Xvfb") is None:
+        pytest.skip("Xvfb is not installed (apt-get install xvfb); .ci/run installs it")
+    read_end, write_end = os.pipe()
+    server = subprocess.Popen(
+        ["Xvfb", "-displayfd", str(write_end), "-screen", "0", f"{SCREEN[0]}x{SCREEN[1]}x24"]
+        + ["-nolisten", "tcp"],
+        pass_fds=(write_end,),
+        stdout=subprocess.DEVNULL,
+        stderr=subprocess.DEVNULL,
+    )
+    os.close(write_end)
+    with os.fdopen(read_end) as numbers:
+        number = numbers.readline().strip()
+    if not number:
+        server.kill()
+        pytest.skip(f"Xvfb did not start (exit code {server.wait()})")
+    yield f":{number}"
+    server.terminate()
+    server.wait()

@@ -18,7 +18,7 @@ from gymnasium.vector import AutoresetMode, VectorEnv
 from gymnasium.vector.utils import batch_space
 
 from composer.batch.environment import BatchEnvironment, BatchTimeStep
-from composer.gym.spaces import box_from_spec
+from composer.gym.spec_spaces import box_from_spec
 
 __all__ = ["WarpVectorEnv"]
 

@@ -33,6 +33,7 @@ __all__ = [
     "SubEnvOutcome",
     "SubEnvironmentError",
     "call_sub_env",
+    "check_spaces_match",
     "read_row",
     "reset_sub_env",
     "step_sub_env",
@@ -61,6 +62,25 @@ class SubEnvOutcome(NamedTuple):
     info: dict[str, Any]
     final_observation: Any = None
     final_info: dict[str, Any] | None = None
+
+
+def check_spaces_match(index: int, env: Any, first: Any) -> None:
+    """Checks that sub-environment `index` has sub-environment 0's spaces.
+
+    Args:
+      index: the index of `env`, for the message.
+      env, first: anything with `observation_space` and `action_space` (a
+        `gymnasium.Env`, or what a remote host reports of one); `first` is sub-environment 0.
+
+    Raises:
+      ValueError: naming `index` and the space that differs.
+    """
+    for name in ("observation_space", "action_space"):
+        if getattr(env, name) != getattr(first, name):
+            raise ValueError(
+                f"sub-environment {index}: {name.replace('_', ' ')} {getattr(env, name)} "
+                f"differs from sub-environment 0's {getattr(first, name)}"
+            )
 
 
 def reset_sub_env(env: gymnasium.Env, seed: int | None, options: dict | None) -> SubEnvOutcome:
@@ -142,7 +162,8 @@ class BatchedVectorEnv(VectorEnv):
     (num_envs,)) is True. `step(actions)` returns the batched `(observations, rewards,
     terminations, truncations, infos)`; observations are written into arrays allocated
     once (returned as copies when `copy` is True), infos are batched as Gymnasium does
-    (each key with a boolean mask `'_' + key`).
+    (each key with a boolean mask `'_' + key`). After `close()`, every call raises
+    `gymnasium.error.ClosedEnvironmentError`.
 
     Args:
       single_observation_space, single_action_space: one sub-environment's spaces.
@@ -197,6 +218,16 @@ class BatchedVectorEnv(VectorEnv):
         """
         raise NotImplementedError
 
+    def _reset_sub_envs(self, arguments: dict[int, tuple]) -> dict[int, SubEnvOutcome]:
+        """Runs `reset_sub_env` with `arguments` and stores the outcomes (a backend that
+        can lose sub-environments overrides it to report them)."""
+        return self._map(reset_sub_env, arguments, self._store)
+
+    def _step_sub_envs(self, arguments: dict[int, tuple]) -> dict[int, SubEnvOutcome]:
+        """Runs `step_sub_env` with `arguments` and stores the outcomes (a backend that
+        can lose sub-environments overrides it to report them)."""
+        return self._map(step_sub_env, arguments, self._store)
+
     def reset(
         self,
         *,
@@ -213,14 +244,13 @@ class BatchedVectorEnv(VectorEnv):
             that is not a bool array of shape (num_envs,) with at least one True.
           SubEnvironmentError: if a sub-environment raised.
         """
+        self._check_open()
         seeds = self._seeds(seed)
         options = dict(options or {})
         mask = self._reset_mask(options.pop("reset_mask", None))
         sub_options = options or None
         indices = np.flatnonzero(mask).tolist()
-        outcomes = self._map(
-            reset_sub_env, {i: (seeds[i], sub_options) for i in indices}, self._store
-        )
+        outcomes = self._reset_sub_envs({i: (seeds[i], sub_options) for i in indices})
         return self._observations_out(), self._batched_infos(outcomes)
 
     def step(self, actions) -> tuple[Any, np.ndarray, np.ndarray, np.ndarray, dict[str, Any]]:
@@ -234,6 +264,7 @@ class BatchedVectorEnv(VectorEnv):
             not reset.
           SubEnvironmentError: if a sub-environment raised.
         """
+        self._check_open()
         mode = self.autoreset_mode
         episode_over = self._episode_over
         if mode is AutoresetMode.DISABLED and episode_over.any():
@@ -242,13 +273,11 @@ class BatchedVectorEnv(VectorEnv):
                 "episodes and autoreset_mode is DISABLED: reset them with "
                 "reset(options={'reset_mask': mask}) before stepping"
             )
-        outcomes = self._map(
-            step_sub_env,
+        outcomes = self._step_sub_envs(
             {
                 i: (action, mode, bool(episode_over[i]))
                 for i, action in enumerate(iterate(self.action_space, actions))
-            },
-            self._store,
+            }
         )
         return (
             self._observations_out(),
@@ -260,10 +289,12 @@ class BatchedVectorEnv(VectorEnv):
 
     def render(self) -> tuple[Any, ...]:
         """Returns each sub-environment's `render()`, in order."""
+        self._check_open()
         return self._in_order(self._map(_render_sub_env, self._all(())))
 
     def call(self, name: str, *args: Any, **kwargs: Any) -> tuple[Any, ...]:
         """Calls method `name` of every sub-environment (or reads the attribute)."""
+        self._check_open()
         return self._in_order(self._map(call_sub_env, self._all((name, args, kwargs))))
 
     def get_attr(self, name: str) -> tuple[Any, ...]:
@@ -283,11 +314,17 @@ class BatchedVectorEnv(VectorEnv):
             raise ValueError(
                 f"set_attr({name!r}): expected {self.num_envs} values, got {len(values)}"
             )
+        self._check_open()
         self._map(_set_sub_env_attr, {i: (name, value) for i, value in enumerate(values)})
 
     def close_extras(self, **kwargs: Any) -> None:
         """Closes every sub-environment."""
         self._map(_close_sub_env, self._all(()))
+
+    def _check_open(self) -> None:
+        """Raises `gymnasium.error.ClosedEnvironmentError` once `close()` was called."""
+        if self.closed:
+            raise gymnasium.error.ClosedEnvironmentError(f"this {type(self).__name__} is closed")
 
     def _all(self, arguments: tuple) -> dict[int, tuple]:
         return dict.fromkeys(range(self.num_envs), arguments)

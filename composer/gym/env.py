@@ -3,8 +3,9 @@
 Contract of the adapter (`GymnasiumEnv`):
 
 - `observation_space` and `action_space` come from the wrapped environment's specs
-  (see `composer.gym.spaces`): observations are the wrapped environment's own dict of
-  arrays, unchanged, or with `flatten_observations` one `Box` of every feature.
+  (see `composer.gym.spec_spaces`): observations are the wrapped environment's own dict
+  of arrays, unchanged, or with `flatten_observations` as `spec_spaces.FlatObservations`
+  packs them (one `Box` of every feature, images kept apart).
 - `observation_space` follows the wrapped environment's observation spec at every
   `reset`: observables enabled, disabled or reconfigured after wrapping (which a
   `composer.Environment` applies at its next reset) change it there, never mid-episode.
@@ -16,7 +17,9 @@ Contract of the adapter (`GymnasiumEnv`):
   The reward is checked against the wrapped environment's `reward_spec()`, which must
   describe one number.
 - `render()` draws the `camera` with `mujoco`'s off-screen renderer: (height, width, 3)
-  uint8 for 'rgb_array', (height, width) float32 metres for 'depth_array'.
+  uint8 for 'rgb_array', (height, width) float32 metres for 'depth_array'. With 'human',
+  `reset` and `step` draw the scene in a window themselves (`composer.viewer`'s, on
+  MuJoCo's `launch_passive`) and `render()` returns None.
 """
 
 import math
@@ -27,11 +30,11 @@ import dm_env
 import gymnasium
 import numpy as np
 
-from composer.gym import spaces as spec_spaces
+from composer.gym import spec_spaces
 
 __all__ = ["GymnasiumEnv"]
 
-_RENDER_MODES = ("rgb_array", "depth_array")
+_RENDER_MODES = ("human", "rgb_array", "depth_array")
 
 
 def _spec_signature(spec) -> Any:
@@ -78,19 +81,27 @@ def _reward_converter(env: dm_env.Environment) -> Callable[[Any], float]:
     return to_float
 
 
+def _window_title(env: dm_env.Environment) -> str:
+    task = getattr(env, "task", None)
+    return type(env).__name__ if task is None else f"{type(task).__name__} ({type(env).__name__})"
+
+
 class GymnasiumEnv(gymnasium.Env):
     """Runs a `dm_env.Environment` through Gymnasium's `Env` API.
 
     Args:
       env: the environment to wrap; seeding needs its `random_state` (an
         `np.random.RandomState`, as `composer.Environment` has), rendering its `physics`.
-      render_mode: None, 'rgb_array' or 'depth_array'. 'human' raises (also through
-        `gymnasium.make`) and `metadata` does not list it, since Gymnasium's env checker
-        opens every listed mode and a window needs a display: `composer.viewer.launch`
-        shows an environment interactively.
-      camera: the camera `render()` draws, by name or index; -1 is the free camera.
+      render_mode: None, 'human', 'rgb_array' or 'depth_array'. 'human' opens a window
+        (`composer.viewer.PassiveWindow`; it needs a display, and GLFW, which comes with
+        `mujoco`) at the first `reset` and redraws it after every `reset` and `step`, as
+        fast as they come (no pacing to real time; `composer.viewer.launch` plays an
+        environment in real time, with keys); `close()` closes it.
+      camera: the camera `render()` draws, by name or index; -1 is the free camera (the
+        'human' window always starts on the free camera).
       width, height: the size of rendered images in pixels (at most the model's
-        off-screen buffer, `<visual><global offwidth offheight>`).
+        off-screen buffer, `<visual><global offwidth offheight>`), or of the 'human'
+        window in screen pixels.
       flatten_observations: concatenate every feature observation, in the observation
         spec's order and each flattened in C order, into one `Box`. Camera images (uint8
         with at least 3 axes) stay separate: with any, observations are a dict of the
@@ -109,7 +120,6 @@ class GymnasiumEnv(gymnasium.Env):
     Raises:
       ValueError: for an unknown `render_mode`, a render mode for an environment
         without `physics`, or a reward spec that is not that of one number.
-      NotImplementedError: for `render_mode='human'`.
     """
 
     metadata: ClassVar[dict[str, Any]] = {"render_modes": list(_RENDER_MODES)}
@@ -124,13 +134,6 @@ class GymnasiumEnv(gymnasium.Env):
         height: int = 480,
         flatten_observations: bool = False,
     ):
-        if render_mode == "human":
-            raise NotImplementedError(
-                "render_mode='human' is not offered: Gymnasium's env checker opens every "
-                "listed render mode, and a window needs a display; watch a composer "
-                "environment with composer.viewer.launch(env, policy), or use "
-                "render_mode='rgb_array'"
-            )
         if render_mode is not None and render_mode not in _RENDER_MODES:
             raise ValueError(
                 f"render_mode: expected None or one of {_RENDER_MODES}, got {render_mode!r}"
@@ -142,6 +145,13 @@ class GymnasiumEnv(gymnasium.Env):
             )
         self._env = env
         self.render_mode = render_mode
+        self._window = None
+        if render_mode == "human":
+            from composer import viewer  # imports glfw: only for a window
+
+            self._window = viewer.PassiveWindow(
+                title=_window_title(env), width=width, height=height
+            )
         self._camera = camera
         self._width = width
         self._height = height
@@ -186,6 +196,7 @@ class GymnasiumEnv(gymnasium.Env):
         timestep = self._env.reset()
         self._follow_observation_spec()
         self._episode_over = False
+        self._show_in_window()
         return self._observation(timestep.observation), {}
 
     def step(self, action) -> tuple[Any, float, bool, bool, dict[str, Any]]:
@@ -213,6 +224,7 @@ class GymnasiumEnv(gymnasium.Env):
             self._episode_over = True
             terminated = discount == 0
             truncated = not terminated
+        self._show_in_window()
         return (
             self._observation(timestep.observation),
             self._reward(timestep.reward),
@@ -222,8 +234,12 @@ class GymnasiumEnv(gymnasium.Env):
         )
 
     def render(self) -> np.ndarray | None:
-        """Returns the camera's view in the render mode chosen at construction (or None)."""
+        """Returns the camera's view in the render mode chosen at construction; None for
+        no render mode, and for 'human' (which redraws the window now)."""
         if self.render_mode is None:
+            return None
+        if self._window is not None:
+            self._window.handle_for(self._env.physics).sync()
             return None
         return self._env.physics.render(
             height=self._height,
@@ -233,8 +249,14 @@ class GymnasiumEnv(gymnasium.Env):
         )
 
     def close(self) -> None:
-        """Closes the wrapped environment."""
+        """Closes the 'human' window, if any, and the wrapped environment."""
+        if self._window is not None:
+            self._window.close()
         self._env.close()
+
+    def _show_in_window(self) -> None:
+        if self._window is not None:
+            self.render()
 
     def _follow_observation_spec(self) -> None:
         """Rebuilds `observation_space` if the wrapped environment's observation spec changed."""
@@ -244,22 +266,11 @@ class GymnasiumEnv(gymnasium.Env):
             return
         self._observation_signature = signature
         if self._flatten:
-            self._layout = spec_spaces.feature_layout(observation_spec)
-            self.observation_space = spec_spaces.flat_space(observation_spec, self._layout)
+            self._flat = spec_spaces.FlatObservations(observation_spec)
+            self.observation_space = self._flat.space
         else:
-            self._layout = None
+            self._flat = None
             self.observation_space = spec_spaces.space_from_spec(observation_spec)
 
     def _observation(self, observation):
-        layout = self._layout
-        if layout is None:
-            return observation
-        if layout.names and not layout.images:
-            return np.concatenate([observation[name].ravel() for name in layout.names])
-        # Images, or nothing at all: a dict, as `spaces.flat_space` describes it.
-        flat = {}
-        if layout.names:
-            flat["features"] = np.concatenate([observation[name].ravel() for name in layout.names])
-        for name in layout.images:
-            flat[name] = observation[name]
-        return flat
+        return observation if self._flat is None else self._flat(observation)

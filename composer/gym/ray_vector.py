@@ -7,11 +7,12 @@ vector step steps all of them. Batching, seeding and autoreset are `BatchedVecto
 and the per-sub-environment functions are the same module functions the threaded
 vector env runs, so with the same seeds and actions the results are bit-identical.
 
-Fault tolerance. An actor that dies (its process is killed or crashes) is replaced by a
-new one whose sub-environments are built afresh, at most `max_restarts` times per actor.
-When that happens during `step`, the other actors' results of that step are kept, and
-each of the dead actor's sub-environments reports its episode truncated, with reward 0
-and `info['restarted']` True:
+Fault tolerance. An actor that dies (its process is killed or crashes, or its node is
+removed) is replaced by a new one whose sub-environments are built afresh, at most
+`max_restarts` times per actor; Ray places it on any node with a free CPU. When that
+happens during `step`, the other actors' results of that step are kept, and each of the
+dead actor's sub-environments reports its episode truncated, with reward 0 and
+`info['restarted']` True:
 
 - NEXT_STEP and DISABLED: the observation is the last one it returned; it is reset on
   the next step (NEXT_STEP) or by the caller (DISABLED), as after any truncation. A
@@ -19,17 +20,26 @@ and `info['restarted']` True:
 - SAME_STEP: the observation is the new episode's reset observation, and
   `info['final_obs']` holds the last observation it returned.
 
-Any other call (`reset`, `call`, `render`, ...) is run again on the new actor; a reset
-marks the restarted sub-environments with `info['restarted']` too. A sub-environment
-that raises is not restarted: the call raises `SubEnvironmentError` with its index, as
-with the threaded vector env, and the vector env can go on after a `reset`.
+A `reset` resets the restarted sub-environments too (those outside its `reset_mask`
+without a seed) and marks them with `info['restarted']`; any other call (`call`,
+`render`, ...) is run again on the new actor. A sub-environment that raises is not
+restarted: the call raises `SubEnvironmentError` with its index, as with the threaded
+vector env, and the vector env can go on after a `reset`.
+
+Bounded waits. Starting an actor (Ray placing it on a node, then it building its
+sub-environments) may take at most `start_timeout` seconds, and every call at most
+`call_timeout`; past either, the vector env kills its actors, closes itself and raises
+`TimeoutError` saying what it waited for. That is what happens when a dead actor cannot be
+placed again (no node has the CPUs it needs) or when the cluster is gone (its raylet died);
+an actor that dies while starting raises `RuntimeError`, the vector env closed likewise.
 """
 
 import functools
 import math
 import numbers
+import time
 from collections.abc import Callable, Sequence
-from typing import Any
+from typing import Any, NamedTuple, NoReturn
 
 import gymnasium
 from gymnasium.vector import AutoresetMode
@@ -39,6 +49,7 @@ from composer.gym.batched import (
     BatchedVectorEnv,
     SubEnvironmentError,
     SubEnvOutcome,
+    check_spaces_match,
     read_row,
     reset_sub_env,
     step_sub_env,
@@ -87,13 +98,32 @@ def _check_count(name: str, value: Any, minimum: int) -> None:
         raise ValueError(f"{name}: expected an integer >= {minimum}, got {value!r}")
 
 
+def _check_seconds(name: str, value: Any) -> None:
+    if isinstance(value, bool) or not isinstance(value, numbers.Real) or not 0 < value < math.inf:
+        raise ValueError(f"{name}: expected a number of seconds > 0, got {value!r}")
+
+
+class _Gathered(NamedTuple):
+    """What a call on the actors brought back.
+
+    `results` maps each sub-environment index whose actor replied to its result; `lost`
+    lists every sub-environment of the actors that died during the call, which are
+    replaced already, with new sub-environments.
+    """
+
+    results: dict[int, Any]
+    lost: tuple[int, ...]
+
+
 class RayVectorEnv(BatchedVectorEnv):
     """A `gymnasium.vector.VectorEnv` whose sub-environments live in Ray actors.
 
     Actor k holds sub-environments k * envs_per_actor up to (k + 1) * envs_per_actor - 1
     (`actors[k]`) and steps them on min(envs_per_actor, max(1, floor(num_cpus_per_actor)))
-    threads. See the module docstring for restarts after an actor dies. `close()` closes
-    the sub-environments and kills the actors; it leaves Ray itself running.
+    threads. Actors are spread over the cluster's nodes (Ray's "SPREAD" scheduling). See
+    the module docstring for restarts after an actor dies and for the bounded waits.
+    `close()` closes the sub-environments and kills the actors; it leaves Ray itself
+    running.
 
     Args:
       env_fns: one picklable callable per sub-environment returning a `gymnasium.Env`
@@ -102,15 +132,21 @@ class RayVectorEnv(BatchedVectorEnv):
       num_envs: the number of sub-environments; needed for an id, else None or
         len(env_fns).
       address: the Ray cluster to join when Ray is not initialised in this process yet:
-        None starts (or joins) a local Ray, "auto" joins the cluster this machine is
-        part of, "ray://host:10001" a remote one. If Ray is initialised, it is used as is.
+        None starts a new local Ray (Ray's address "local"), whatever an earlier Ray left
+        behind (`RAY_ADDRESS`, a dead cluster's address file); "auto" joins the cluster
+        this machine is part of, "host:6379" or "ray://host:10001" a given one. If Ray is
+        initialised, it is used as is.
       envs_per_actor: sub-environments per actor; None spreads them over the cluster's
         CPUs (ceil(num_envs / CPUs)).
       num_cpus_per_actor: CPUs Ray reserves for each actor; None for
         min(1, CPUs / actors), so that every actor fits on an idle cluster. Ray starts
-        an actor only once that many CPUs are free, so with other actors about (another
-        vector env on the same machine, say) pass less, or 0.
+        an actor only once that many CPUs are free on one node, so with other actors
+        about (another vector env on the same machine, say) pass less, or 0.
       max_restarts: how many times each actor may be replaced after dying.
+      start_timeout: the longest wait, in seconds, for actors to start (be placed on a
+        node and build their sub-environments), when made and when replaced.
+      call_timeout: the longest wait, in seconds, for the actors' replies to one call
+        (`reset`, `step`, `call`, `render`, `close`, ...).
       autoreset_mode: an `AutoresetMode` (or its value); NEXT_STEP by default.
       copy: return copies of the observation arrays (see `BatchedVectorEnv`).
 
@@ -118,6 +154,7 @@ class RayVectorEnv(BatchedVectorEnv):
       ImportError: if Ray is not installed.
       ValueError: for a bad argument, or sub-environments whose spaces differ.
       SubEnvironmentError: if a sub-environment's factory raised.
+      TimeoutError: if the actors did not start within `start_timeout`.
     """
 
     def __init__(
@@ -129,6 +166,8 @@ class RayVectorEnv(BatchedVectorEnv):
         envs_per_actor: int | None = None,
         num_cpus_per_actor: float | None = None,
         max_restarts: int = 10,
+        start_timeout: float = 120.0,
+        call_timeout: float = 120.0,
         autoreset_mode: AutoresetMode | str = AutoresetMode.NEXT_STEP,
         copy: bool = True,
     ):
@@ -144,9 +183,11 @@ class RayVectorEnv(BatchedVectorEnv):
                 f"num_cpus_per_actor: expected a number >= 0 or None, got {num_cpus_per_actor!r}"
             )
         _check_count("max_restarts", max_restarts, minimum=0)
+        _check_seconds("start_timeout", start_timeout)
+        _check_seconds("call_timeout", call_timeout)
         ray = _import_ray()
         if not ray.is_initialized():
-            ray.init(address=address)
+            ray.init(address="local" if address is None else address)
         cpus = ray.cluster_resources().get("CPU", 1.0)
         if envs_per_actor is None:
             envs_per_actor = math.ceil(len(env_fns) / max(1, int(cpus)))
@@ -156,6 +197,8 @@ class RayVectorEnv(BatchedVectorEnv):
             num_cpus_per_actor = min(1.0, cpus / num_actors)
         self.num_cpus_per_actor = float(num_cpus_per_actor)
         self.max_restarts = int(max_restarts)
+        self.start_timeout = float(start_timeout)
+        self.call_timeout = float(call_timeout)
         self.restarts = [0] * num_actors
         self._ray = ray
         self._env_fns = env_fns
@@ -178,9 +221,12 @@ class RayVectorEnv(BatchedVectorEnv):
 
     @property
     def actors(self) -> tuple:
-        """The Ray actor handles, actor k holding the sub-environments of `indices_of(k)`."""
-        if self._actors is None:
-            raise RuntimeError("this RayVectorEnv is closed")
+        """The Ray actor handles, actor k holding the sub-environments of `indices_of(k)`.
+
+        Raises:
+          gymnasium.error.ClosedEnvironmentError: if the vector env is closed.
+        """
+        self._check_open()
         return tuple(self._actors)
 
     def indices_of(self, actor: int) -> range:
@@ -194,8 +240,10 @@ class RayVectorEnv(BatchedVectorEnv):
         Raises:
           SubEnvironmentError: for the lowest index whose factory raised.
           ValueError: for spaces that differ from the first sub-environment's.
+          TimeoutError: if an actor did not start within `start_timeout`.
+          RuntimeError: if an actor died while starting (the vector env is closed).
         """
-        options = {"num_cpus": self.num_cpus_per_actor}
+        options = {"num_cpus": self.num_cpus_per_actor, "scheduling_strategy": "SPREAD"}
         threads = min(self.envs_per_actor, max(1, math.floor(self.num_cpus_per_actor)))
         actor_class = _host_actor_class()
         for k in actors:
@@ -203,9 +251,20 @@ class RayVectorEnv(BatchedVectorEnv):
             self._actors[k] = actor_class.options(**options).remote(
                 [self._env_fns[i] for i in indices], threads
             )
-        replies = self._ray.get([self._actors[k].build.remote() for k in actors])
+        pending = {k: self._actors[k].build.remote() for k in actors}
+        replies = self._wait(pending, self.start_timeout, self._start_timeout_message)
         failures = {}
-        for k, reply in zip(actors, replies):
+        for k in actors:
+            try:
+                reply = self._ray.get(replies[k])
+            except self._ray.exceptions.RayActorError as error:
+                self._give_up(
+                    RuntimeError(
+                        f"RayVectorEnv: the Ray actor of {self._sub_envs_of([k])} died while "
+                        f"starting ({type(error).__name__}): its node may be gone, or the "
+                        "cluster (a raylet died). The vector env is closed."
+                    )
+                )
             if isinstance(reply, HostSpec):
                 self._check_spec(k, reply)
             else:
@@ -217,13 +276,7 @@ class RayVectorEnv(BatchedVectorEnv):
         if self._spec is None:
             self._spec = spec
             return
-        first = self.indices_of(actor).start
-        for name in ("observation_space", "action_space"):
-            if getattr(spec, name) != getattr(self._spec, name):
-                raise ValueError(
-                    f"sub-environment {first}: {name.replace('_', ' ')} {getattr(spec, name)} "
-                    f"differs from sub-environment 0's {getattr(self._spec, name)}"
-                )
+        check_spaces_match(self.indices_of(actor).start, spec, self._spec)
 
     def _map(
         self,
@@ -231,23 +284,111 @@ class RayVectorEnv(BatchedVectorEnv):
         arguments: dict[int, tuple],
         store: Callable[[int, Any], None] | None = None,
     ) -> dict[int, Any]:
-        if self._actors is None:
-            raise RuntimeError("this RayVectorEnv is closed")
+        return self._run(function, arguments, store).results
+
+    def _reset_sub_envs(self, arguments: dict[int, tuple]) -> dict[int, SubEnvOutcome]:
+        outcomes, restarted = self._run(reset_sub_env, arguments, self._store, every_lost=True)
+        for i in restarted:
+            outcomes[i] = outcomes[i]._replace(info={**outcomes[i].info, "restarted": True})
+        return outcomes
+
+    def _step_sub_envs(self, arguments: dict[int, tuple]) -> dict[int, SubEnvOutcome]:
+        outcomes, lost = self._transport(step_sub_env, arguments, self._store)
+        if lost:
+            outcomes.update(self._restarted_step_outcomes(lost))
+        return outcomes
+
+    def _restarted_step_outcomes(self, lost: Sequence[int]) -> dict[int, SubEnvOutcome]:
+        """The outcomes of a step whose actors died, for their new sub-environments `lost`
+        (see the module docstring), stored in the batched arrays."""
+        same_step = self.autoreset_mode is AutoresetMode.SAME_STEP
+        # `_episode_over` still holds the lost rows' state from before this step.
+        due = {i for i in lost if self._episode_over[i]}
+        to_reset = set(lost) if same_step else due
+        resets = self._run(reset_sub_env, dict.fromkeys(sorted(to_reset), (None, None))).results
+        outcomes = {}
+        for i in lost:
+            last_observation = read_row(self._observations, i)
+            if i in due:
+                outcome = resets[i]._replace(info={**resets[i].info, "restarted": True})
+            elif same_step:
+                outcome = SubEnvOutcome(
+                    observation=resets[i].observation,
+                    reward=0.0,
+                    terminated=False,
+                    truncated=True,
+                    info={**resets[i].info, "restarted": True},
+                    final_observation=last_observation,
+                    final_info={"restarted": True},
+                )
+            else:
+                outcome = SubEnvOutcome(
+                    observation=last_observation,
+                    reward=0.0,
+                    terminated=False,
+                    truncated=True,
+                    info={"restarted": True},
+                )
+            self._store(i, outcome)
+            outcomes[i] = outcome
+        return outcomes
+
+    def _run(
+        self,
+        function: Callable[..., Any],
+        arguments: dict[int, tuple],
+        store: Callable[[int, Any], None] | None = None,
+        *,
+        every_lost: bool = False,
+    ) -> _Gathered:
+        """Runs `function` on the listed sub-environments, again on restarted ones.
+
+        Returns:
+          Every result, and in `lost` all the sub-environments restarted meanwhile. With
+          `every_lost`, those outside `arguments` (the dead actors' other
+          sub-environments) run too, with the arguments (None, None).
+        """
+        results, lost = self._transport(function, arguments, store)
+        restarted: set[int] = set()
+        while lost:
+            restarted.update(lost)
+            again = {
+                i: arguments.get(i, (None, None)) for i in lost if every_lost or i in arguments
+            }
+            more, lost = self._transport(function, again, store)
+            results.update(more)
+        return _Gathered(results, tuple(sorted(restarted)))
+
+    def _transport(
+        self,
+        function: Callable[..., Any],
+        arguments: dict[int, tuple],
+        store: Callable[[int, Any], None] | None = None,
+    ) -> _Gathered:
+        """Runs `function(sub_env_i, *arguments[i])` on the actors, one call per actor;
+        replaces the actors that died meanwhile.
+
+        Raises:
+          SubEnvironmentError: for the lowest index whose call raised.
+          RuntimeError: if an actor died more than `max_restarts` times.
+          TimeoutError: if an actor did not reply within `call_timeout` (or a
+            replacement did not start within `start_timeout`).
+        """
         by_actor: dict[int, dict[int, tuple]] = {}
         for i, args in arguments.items():
             k = i // self.envs_per_actor
             by_actor.setdefault(k, {})[i - k * self.envs_per_actor] = args
-        replies, dead = self._gather(
-            {k: self._call(k, function, local) for k, local in by_actor.items()}, unpack
-        )
+        pending = {
+            k: self._actors[k].map.remote(pack((function, local))) for k, local in by_actor.items()
+        }
+        replies, dead = self._gather(pending)
         for k in dead:
             self._replace(k)
-            replies[k] = self._rerun_on_restarted(k, function, by_actor[k])
         results: dict[int, Any] = {}
         failures: dict[int, SubEnvFailure] = {}
         for k, reply in replies.items():
             start = self.indices_of(k).start
-            for local, result in reply.items():
+            for local, result in unpack(reply).items():
                 if isinstance(result, SubEnvFailure):
                     failures[start + local] = result
                     continue
@@ -255,39 +396,92 @@ class RayVectorEnv(BatchedVectorEnv):
                 if store is not None:
                     store(start + local, result)
         _raise_lowest(failures)
-        return results
+        return _Gathered(results, tuple(i for k in dead for i in self.indices_of(k)))
 
-    def _call(self, actor: int, function: Callable[..., Any], local: dict[int, tuple]):
-        """Starts `function` on actor number `actor`'s sub-environments; returns the
-        reference to its packed reply."""
-        return self._actors[actor].map.remote(pack((function, local)))
+    def _gather(self, pending: dict[int, Any]) -> tuple[dict[int, Any], list[int]]:
+        """Waits for every actor's reply; returns {actor: reply} and the actors that died.
 
-    def _ray_get(self, reference) -> dict[int, Any]:
-        return unpack(self._ray.get(reference))
-
-    def _gather(
-        self, pending: dict[int, Any], read: Callable[[Any], Any] = lambda reply: reply
-    ) -> tuple[dict[int, Any], list[int]]:
-        """Waits for every actor's reply; returns {actor: read(reply)} and the actors that
-        died."""
+        Raises:
+          TimeoutError: if an actor did not reply within `call_timeout`.
+        """
         ray = self._ray
+        deadline = time.monotonic() + self.call_timeout
         try:
-            return dict(zip(pending, map(read, ray.get(list(pending.values()))))), []
-        except ray.exceptions.RayActorError:
+            values = ray.get(list(pending.values()), timeout=self.call_timeout)
+            return dict(zip(pending, values)), []
+        except (ray.exceptions.RayActorError, ray.exceptions.GetTimeoutError):
             pass
+        remaining = max(0.0, deadline - time.monotonic())
         replies, dead = {}, []
-        for k, reference in pending.items():
+        for k, reference in self._wait(pending, remaining, self._call_timeout_message).items():
             try:
-                replies[k] = read(ray.get(reference))
+                replies[k] = ray.get(reference)
             except ray.exceptions.RayActorError:
                 dead.append(k)
         return replies, dead
+
+    def _wait(
+        self, pending: dict[int, Any], timeout: float, message: Callable[[list[int]], str]
+    ) -> dict[int, Any]:
+        """Waits up to `timeout` seconds for every reference in `pending` to be ready.
+
+        Raises:
+          TimeoutError: `message(actors not ready)`, after killing the actors and closing
+            the vector env.
+        """
+        references = list(pending.values())
+        _, not_ready = self._ray.wait(references, num_returns=len(references), timeout=timeout)
+        if not not_ready:
+            return pending
+        late = [k for k, reference in pending.items() if reference in not_ready]
+        self._give_up(TimeoutError(message(late)))
+
+    def _give_up(self, error: Exception) -> NoReturn:
+        """Kills the actors, closes the vector env and raises `error`."""
+        self._kill_actors()
+        self.closed = True
+        raise error
+
+    def _start_timeout_message(self, actors: list[int]) -> str:
+        ray = self._ray
+        free = ray.available_resources().get("CPU", 0.0)
+        total = ray.cluster_resources().get("CPU", 0.0)
+        nodes = sum(node["Alive"] for node in ray.nodes())
+        return (
+            f"RayVectorEnv: the Ray actors of {self._sub_envs_of(actors)} did not start "
+            f"within start_timeout={self.start_timeout:g} s; each needs "
+            f"{self.num_cpus_per_actor:g} CPU on one node, and the cluster reports {free:g} "
+            f"of {total:g} CPUs free on {nodes} live node(s). Free CPUs or add a node, or "
+            "pass a smaller num_cpus_per_actor; if the cluster is gone (a raylet died), start "
+            "a new one; if building the sub-environments is slow, pass a longer "
+            "start_timeout. The vector env is closed."
+        )
+
+    def _call_timeout_message(self, actors: list[int]) -> str:
+        return (
+            f"RayVectorEnv: no reply within call_timeout={self.call_timeout:g} s from the Ray "
+            f"actors of {self._sub_envs_of(actors)}: the Ray cluster may be gone (its raylet "
+            "or head node died), or the call is slower than that (pass a longer "
+            "call_timeout). The vector env is closed."
+        )
+
+    def _sub_envs_of(self, actors: list[int]) -> str:
+        named = []
+        for k in actors:
+            first, last = self.indices_of(k)[0], self.indices_of(k)[-1]
+            named.append(
+                f"sub-environment {first}"
+                if first == last
+                else f"sub-environments {first} to {last}"
+            )
+        return ", ".join(named)
 
     def _replace(self, actor: int) -> None:
         """Replaces dead actor number `actor` by a new one with new sub-environments.
 
         Raises:
           RuntimeError: if the actor has died more than `max_restarts` times.
+          TimeoutError: if the new actor did not start within `start_timeout`.
         """
         self.restarts[actor] += 1
         if self.restarts[actor] > self.max_restarts:
@@ -298,34 +492,6 @@ class RayVectorEnv(BatchedVectorEnv):
             )
         self._ray.kill(self._actors[actor], no_restart=True)
         self._start_actors([actor])
-
-    def _rerun_on_restarted(
-        self, actor: int, function: Callable[..., Any], local: dict[int, tuple]
-    ) -> dict[int, Any]:
-        """What the new actor's sub-environments report for the call their old one lost."""
-        mode = self.autoreset_mode
-        start = self.indices_of(actor).start
-        if function is step_sub_env:
-            # Only NEXT_STEP leaves an ended episode to be reset on the next step.
-            due = {i for i, (_, _, episode_over) in local.items() if episode_over}
-            to_reset = set(local) if mode is AutoresetMode.SAME_STEP else due
-            resets = self._ray_get(
-                self._call(actor, reset_sub_env, dict.fromkeys(to_reset, (None, None)))
-            )
-            last = {i: read_row(self._observations, start + i) for i in local}
-            outcomes = {}
-            for i in local:
-                if i in due:
-                    outcomes[i] = _mark_restarted(resets[i])
-                elif mode is AutoresetMode.SAME_STEP:
-                    outcomes[i] = _restarted_same_step(resets[i], last[i])
-                else:
-                    outcomes[i] = SubEnvOutcome(last[i], 0.0, False, True, {"restarted": True})
-            return outcomes
-        reply = self._ray_get(self._call(actor, function, local))
-        if function is reset_sub_env:
-            return {i: _mark_restarted(outcome) for i, outcome in reply.items()}
-        return reply
 
     def close_extras(self, **kwargs: Any) -> None:
         """Closes the sub-environments and kills the actors (Ray keeps running)."""
@@ -341,26 +507,6 @@ class RayVectorEnv(BatchedVectorEnv):
             if actor is not None:
                 self._ray.kill(actor, no_restart=True)
         self._actors = None
-
-
-def _mark_restarted(outcome: Any) -> Any:
-    if isinstance(outcome, SubEnvOutcome):
-        return outcome._replace(info={**outcome.info, "restarted": True})
-    return outcome
-
-
-def _restarted_same_step(reset: Any, last_observation: Any) -> Any:
-    if isinstance(reset, SubEnvFailure):
-        return reset
-    return SubEnvOutcome(
-        reset.observation,
-        0.0,
-        False,
-        True,
-        {**reset.info, "restarted": True},
-        last_observation,
-        {"restarted": True},
-    )
 
 
 def _raise_lowest(failures: dict[int, SubEnvFailure]) -> None:

@@ -17,7 +17,7 @@ from typing import Any
 import gymnasium
 from gymnasium.vector import AutoresetMode
 
-from composer.gym.batched import BatchedVectorEnv, SubEnvironmentError
+from composer.gym.batched import BatchedVectorEnv, SubEnvironmentError, check_spaces_match
 
 __all__ = ["ThreadedVectorEnv"]
 
@@ -36,21 +36,6 @@ class _Worker:
     def _run(self) -> None:
         while (job := self._jobs.get()) is not None:
             job()
-
-
-def _check_spaces_match(envs: Sequence[gymnasium.Env]) -> None:
-    first = envs[0]
-    for i, env in enumerate(envs):
-        if env.observation_space != first.observation_space:
-            raise ValueError(
-                f"sub-environment {i}: observation space {env.observation_space} differs "
-                f"from sub-environment 0's {first.observation_space}"
-            )
-        if env.action_space != first.action_space:
-            raise ValueError(
-                f"sub-environment {i}: action space {env.action_space} differs from "
-                f"sub-environment 0's {first.action_space}"
-            )
 
 
 class ThreadedVectorEnv(BatchedVectorEnv):
@@ -103,7 +88,8 @@ class ThreadedVectorEnv(BatchedVectorEnv):
         self._envs = [built[i] for i in range(len(env_fns))]
         first = self._envs[0]
         try:
-            _check_spaces_match(self._envs)
+            for i, env in enumerate(self._envs):
+                check_spaces_match(i, env, first)
         except ValueError:
             self._run_on_threads(lambda i: self._envs[i].close(), range(len(env_fns)))
             self._stop_workers()
@@ -145,11 +131,8 @@ class ThreadedVectorEnv(BatchedVectorEnv):
         """Runs `task(i)` on sub-environment i's thread for each i; returns {i: result}.
 
         Raises:
-          RuntimeError: if the vector env is closed.
           SubEnvironmentError: for the lowest i whose task raised, after all finished.
         """
-        if not self._workers:
-            raise RuntimeError("this ThreadedVectorEnv is closed")
         results: dict[int, Any] = {}
         errors: dict[int, BaseException] = {}
         by_worker: dict[int, list[int]] = {}

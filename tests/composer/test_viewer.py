@@ -21,7 +21,6 @@ viewer = pytest.importorskip("composer.viewer", reason="mujoco.viewer cannot be 
 
 _SCENE_DIR = pathlib.Path(__file__).resolve().parent
 _REPO = _SCENE_DIR.parents[1]
-_SCREEN = (1024, 768)
 
 
 # Key handling, without a window.
@@ -179,30 +178,6 @@ def test_bad_window_title_or_size_is_rejected_before_the_loader_is_called(window
 
 
 # The real window on a virtual X display.
-
-
-@pytest.fixture(scope="module")
-def display():
-    """Starts Xvfb on a display number it picks itself; yields ':N'."""
-    if shutil.which("Xvfb") is None:
-        pytest.skip("Xvfb is not installed (apt-get install xvfb); .ci/run installs it")
-    read_end, write_end = os.pipe()
-    server = subprocess.Popen(
-        ["Xvfb", "-displayfd", str(write_end), "-screen", "0", f"{_SCREEN[0]}x{_SCREEN[1]}x24"]
-        + ["-nolisten", "tcp"],
-        pass_fds=(write_end,),
-        stdout=subprocess.DEVNULL,
-        stderr=subprocess.DEVNULL,
-    )
-    os.close(write_end)
-    with os.fdopen(read_end) as numbers:
-        number = numbers.readline().strip()
-    if not number:
-        server.kill()
-        pytest.skip(f"Xvfb did not start (exit code {server.wait()})")
-    yield f":{number}"
-    server.terminate()
-    server.wait()
 
 
 def _start(display, tmp_path, body):

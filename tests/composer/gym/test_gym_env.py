@@ -254,10 +254,9 @@ def test_without_render_mode_render_returns_none():
     assert env.render() is None
 
 
-def test_human_render_mode_is_not_available_yet():
-    assert GymnasiumEnv.metadata["render_modes"] == ["rgb_array", "depth_array"]
-    with pytest.raises(NotImplementedError, match="viewer"):
-        GymnasiumEnv(slider_environment(), render_mode="human")
+def test_metadata_lists_human_and_the_off_screen_render_modes():
+    # The window itself is tested under Xvfb in test_gym_human_render.py.
+    assert GymnasiumEnv.metadata["render_modes"] == ["human", "rgb_array", "depth_array"]
 
 
 def test_unknown_render_mode_is_rejected_naming_it():
@@ -298,15 +297,6 @@ def test_every_manipulation_task_passes_gymnasiums_env_checker(name):
         # Advice about unbounded observations and non-normalised actions, not errors.
         warnings.simplefilter("ignore", UserWarning)
         check_env(env, skip_render_check=True)
-
-
-def test_rendering_env_passes_gymnasiums_env_checker_with_its_render_check():
-    env = gymnasium.make(
-        "composer/reach_site_features-v0", render_mode="rgb_array", width=32, height=24
-    )
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore", UserWarning)
-        check_env(env.unwrapped)
 
 
 def test_flattening_a_task_without_observations_gives_empty_dict_observations():

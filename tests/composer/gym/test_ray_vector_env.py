@@ -28,8 +28,10 @@ _README = _HERE.parents[2] / "README.md"
 @pytest.fixture(scope="module")
 def ray():
     ray = pytest.importorskip("ray", reason="Ray is not installed (pip install -e '.[ray]')")
-    # The actors' processes import gym_scene (pickled by reference) from this folder.
+    # The actors' processes import gym_scene (pickled by reference) from this folder. A
+    # new local Ray ("local"), whatever a killed earlier run left behind.
     ray.init(
+        address="local",
         num_cpus=2,
         include_dashboard=False,
         runtime_env={"env_vars": {"PYTHONPATH": str(_HERE)}},
@@ -120,6 +122,20 @@ def test_make_vec_with_backend_ray_matches_the_threads_backend(ray, closing):
         assert _bits(got) == _bits(expected)
 
 
+def test_make_vec_passes_the_ray_timeouts_on(ray, closing):
+    envs = closing(
+        gymnasium.make_vec(
+            "composer/reach_site_features-v0",
+            num_envs=1,
+            vectorization_mode="vector_entry_point",
+            backend="ray",
+            start_timeout=30,
+            call_timeout=45,
+        )
+    )
+    assert (envs.start_timeout, envs.call_timeout) == (30.0, 45.0)
+
+
 def test_a_registered_id_is_made_with_gymnasium_make_in_the_actors(ray, closing):
     envs = closing(RayVectorEnv("composer/reach_site_features-v0", num_envs=2, envs_per_actor=2))
     assert len(envs.actors) == 1
@@ -170,6 +186,22 @@ def test_a_killed_actor_in_same_step_mode_returns_reset_and_final_observations(r
     assert infos["_final_obs"].tolist() == [True, False]
     assert infos["final_obs"][0].tolist() == [101]
     assert infos["restarted"][0]
+
+
+def test_a_masked_reset_after_an_actor_died_also_resets_its_other_sub_env(ray, closing):
+    envs = closing(RayVectorEnv(_counters([5, 5, 5, 5]), envs_per_actor=2))
+    zeros = np.zeros((4, 1))
+    envs.reset(seed=0)
+    envs.step(zeros)
+    _kill(ray, envs.actors[1])
+    # Sub-env 2 is reset with seed 1 + 2; sub-env 3, new and outside the mask, without one
+    # (a new CounterEnv's first unseeded episode starts at 0).
+    mask = np.array([False, False, True, False])
+    observations, infos = envs.reset(seed=1, options={"reset_mask": mask})
+    assert observations[:, 0].tolist() == [1, 101, 300, 0]
+    assert infos["_restarted"].tolist() == [False, False, True, True]
+    observations, *_ = envs.step(zeros)
+    assert observations[:, 0].tolist() == [2, 102, 301, 1]
 
 
 def test_an_actor_that_dies_more_than_max_restarts_times_raises(ray, closing):
@@ -243,5 +275,5 @@ def test_close_kills_every_actor_and_frees_their_cpus(ray, closing):
     while ray.available_resources().get("CPU", 0) < 2 and time.monotonic() < deadline:
         time.sleep(0.1)
     assert ray.available_resources().get("CPU", 0) == 2
-    with pytest.raises(RuntimeError, match="closed"):
+    with pytest.raises(gymnasium.error.ClosedEnvironmentError, match="closed"):
         envs.actors  # noqa: B018

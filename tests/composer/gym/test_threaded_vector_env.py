@@ -189,8 +189,14 @@ def test_close_closes_the_sub_envs_and_joins_the_threads():
     assert _worker_threads(earlier) == []
     assert threading.active_count() == before
     assert all(env.dm_env.physics is None for env in sub_envs)
-    with pytest.raises(RuntimeError, match="closed"):
-        envs.step(np.zeros((2, 9)))
+    closed = "this ThreadedVectorEnv is closed"
+    for call in (lambda: envs.step(np.zeros((2, 9))), envs.reset, envs.render):
+        with pytest.raises(gymnasium.error.ClosedEnvironmentError, match=closed):
+            call()
+    with pytest.raises(gymnasium.error.ClosedEnvironmentError, match=closed):
+        envs.call("render")
+    with pytest.raises(gymnasium.error.ClosedEnvironmentError, match=closed):
+        envs.set_attr("render_mode", None)
 
 
 def test_sub_envs_with_different_spaces_are_rejected():

@@ -7,7 +7,7 @@ import pytest
 from dm_env import specs
 from gymnasium import spaces
 
-from composer.gym import spaces as spec_spaces
+from composer.gym import spec_spaces
 
 
 def test_bounded_array_becomes_box_with_its_bounds_and_dtype():
@@ -61,18 +61,41 @@ def test_flat_space_concatenates_feature_bounds_and_keeps_images_apart():
         "camera": specs.BoundedArray((1, 8, 8, 3), np.uint8, 0, 255),
         "speed": specs.Array((1,), np.float64),
     }
-    layout = spec_spaces.feature_layout(spec)
-    assert layout.names == ("joint", "speed")
-    assert layout.images == ("camera",)
-    space = spec_spaces.flat_space(spec, layout)
-    assert list(space.keys()) == ["features", "camera"]
-    np.testing.assert_array_equal(space["features"].low, [-1, -2, -np.inf])
-    np.testing.assert_array_equal(space["features"].high, [1, 2, np.inf])
-    assert space["camera"].shape == (1, 8, 8, 3)
+    flat = spec_spaces.FlatObservations(spec)
+    assert flat.features == ("joint", "speed")
+    assert flat.images == ("camera",)
+    assert list(flat.space.keys()) == ["features", "camera"]
+    np.testing.assert_array_equal(flat.space["features"].low, [-1, -2, -np.inf])
+    np.testing.assert_array_equal(flat.space["features"].high, [1, 2, np.inf])
+    assert flat.space["camera"].shape == (1, 8, 8, 3)
+    image = np.full((1, 8, 8, 3), 7, np.uint8)
+    observation = flat(
+        {"joint": np.array([[0.5, -1.5]]), "camera": image, "speed": np.array([3.0])}
+    )
+    assert list(observation) == ["features", "camera"]
+    assert observation["features"].tolist() == [0.5, -1.5, 3.0]
+    assert observation["camera"] is image
 
 
 def test_flat_space_of_features_only_is_one_box():
     spec = {"a": specs.Array((2,), np.float64), "b": specs.Array((1, 3), np.float64)}
-    space = spec_spaces.flat_space(spec, spec_spaces.feature_layout(spec))
-    assert isinstance(space, spaces.Box)
-    assert space.shape == (5,)
+    flat = spec_spaces.FlatObservations(spec)
+    assert isinstance(flat.space, spaces.Box)
+    assert flat.space.shape == (5,)
+    observation = flat({"a": np.array([1.0, 2.0]), "b": np.array([[3.0, 4.0, 5.0]])})
+    assert observation.tolist() == [1.0, 2.0, 3.0, 4.0, 5.0]
+
+
+def test_flat_space_of_images_only_is_a_dict_of_the_images():
+    spec = {"left": specs.Array((4, 4, 3), np.uint8), "right": specs.Array((4, 4, 3), np.uint8)}
+    flat = spec_spaces.FlatObservations(spec)
+    assert isinstance(flat.space, spaces.Dict)
+    assert list(flat.space.keys()) == ["left", "right"]
+    images = {"left": np.zeros((4, 4, 3), np.uint8), "right": np.ones((4, 4, 3), np.uint8)}
+    assert list(flat(images)) == ["left", "right"]
+
+
+def test_a_nested_observation_cannot_be_flattened_and_is_named():
+    spec = {"arm": {"joint": specs.Array((2,), np.float64)}}
+    with pytest.raises(TypeError, match="observation 'arm': expected an array spec to flatten"):
+        spec_spaces.FlatObservations(spec)

@@ -1,0 +1,121 @@
+"""Gymnasium spaces from dm_env specs, and the flattening of feature observations.
+
+`BoundedArray` becomes a `Box` with the same bounds, shape and dtype; `Array` an unbounded
+`Box` (the widest range its dtype holds); a mapping of specs a `Dict` in the same order.
+`FlatObservations` is what `GymnasiumEnv(flatten_observations=True)` returns instead of the
+dict of observations: its space and its packing are chosen in one place.
+"""
+
+import collections
+from collections.abc import Callable, Mapping
+from typing import Any
+
+import numpy as np
+from dm_env import specs
+from gymnasium import spaces
+
+__all__ = ["FlatObservations", "box_from_spec", "is_image_spec", "space_from_spec"]
+
+
+def box_from_spec(spec: specs.Array) -> spaces.Box:
+    """Returns the `Box` holding exactly the arrays `spec` accepts.
+
+    Raises:
+      TypeError: if `spec` is not a `dm_env.specs.Array`.
+    """
+    if not isinstance(spec, specs.Array):
+        raise TypeError(f"expected a dm_env.specs.Array, got {type(spec).__name__}: {spec!r}")
+    dtype = np.dtype(spec.dtype)
+    if isinstance(spec, specs.BoundedArray):
+        low = np.broadcast_to(spec.minimum, spec.shape).astype(dtype)
+        high = np.broadcast_to(spec.maximum, spec.shape).astype(dtype)
+    elif np.issubdtype(dtype, np.integer):
+        low = np.full(spec.shape, np.iinfo(dtype).min, dtype)
+        high = np.full(spec.shape, np.iinfo(dtype).max, dtype)
+    else:
+        low = np.full(spec.shape, -np.inf, dtype)
+        high = np.full(spec.shape, np.inf, dtype)
+    return spaces.Box(low=low, high=high, shape=spec.shape, dtype=dtype)
+
+
+def space_from_spec(spec) -> spaces.Space:
+    """Returns a `Box` for an array spec, a `Dict` (same keys, same order) for a mapping.
+
+    Raises:
+      TypeError: if `spec` or one of its values is neither an array spec nor a mapping.
+    """
+    if isinstance(spec, Mapping):
+        return spaces.Dict(
+            collections.OrderedDict((name, space_from_spec(value)) for name, value in spec.items())
+        )
+    return box_from_spec(spec)
+
+
+def is_image_spec(spec: specs.Array) -> bool:
+    """True for a camera image: (height, width, channels), possibly behind buffer axes."""
+    return np.dtype(spec.dtype) == np.uint8 and len(spec.shape) >= 3
+
+
+class FlatObservations:
+    """Flattens observations of one spec: the features into one vector, images kept apart.
+
+    Features are every observation that is not a camera image (uint8 with at least 3
+    axes), concatenated in the spec's order, each flattened in C order. What an
+    observation becomes depends only on which kinds the spec has:
+
+    | the spec has        | observation (and `space`)                               |
+    |---------------------|---------------------------------------------------------|
+    | features only       | the feature vector (a `Box`)                            |
+    | features and images | a dict: 'features' (the vector), then each image        |
+    | images only         | a dict of the images                                    |
+
+    Args:
+      observation_spec: a flat mapping of names to array specs.
+
+    Raises:
+      TypeError: if a value is not an array spec (nested observations cannot be flattened).
+    """
+
+    def __init__(self, observation_spec: Mapping[str, specs.Array]):
+        features, images = [], []
+        for name, spec in observation_spec.items():
+            if not isinstance(spec, specs.Array):
+                raise TypeError(
+                    f"observation {name!r}: expected an array spec to flatten, got "
+                    f"{type(spec).__name__}"
+                )
+            (images if is_image_spec(spec) else features).append(name)
+        self.features: tuple[str, ...] = tuple(features)
+        self.images: tuple[str, ...] = tuple(images)
+        feature_boxes = [box_from_spec(observation_spec[name]) for name in self.features]
+        self.space: spaces.Space = self._pack(
+            _concatenated_box(feature_boxes) if feature_boxes else None,
+            {name: box_from_spec(observation_spec[name]) for name in self.images},
+            lambda packed: spaces.Dict(collections.OrderedDict(packed)),
+        )
+
+    def __call__(self, observation: Mapping[str, np.ndarray]) -> Any:
+        """Returns `observation` (a dict of the spec's arrays) flattened as `space` says."""
+        return self._pack(
+            np.concatenate([observation[name].ravel() for name in self.features])
+            if self.features
+            else None,
+            {name: observation[name] for name in self.images},
+            dict,
+        )
+
+    def _pack(self, features: Any, images: dict[str, Any], mapping: Callable[[dict], Any]) -> Any:
+        """The one choice of the table above, for spaces and for observations alike."""
+        if self.features and not self.images:
+            return features
+        packed = {"features": features} if self.features else {}
+        return mapping({**packed, **images})
+
+
+def _concatenated_box(boxes: list[spaces.Box]) -> spaces.Box:
+    dtype = np.result_type(*(box.dtype for box in boxes))
+    return spaces.Box(
+        low=np.concatenate([box.low.ravel() for box in boxes]).astype(dtype),
+        high=np.concatenate([box.high.ravel() for box in boxes]).astype(dtype),
+        dtype=dtype,
+    )
