@@ -33,6 +33,7 @@ __all__ = [
     "SubEnvOutcome",
     "SubEnvironmentError",
     "call_sub_env",
+    "check_spaces_match",
     "read_row",
     "reset_sub_env",
     "step_sub_env",
@@ -92,6 +93,22 @@ def call_sub_env(env: gymnasium.Env, name: str, args: tuple, kwargs: dict) -> An
     """Calls `env`'s method `name` (looked up through its wrappers), or returns the attribute."""
     attribute = env.get_wrapper_attr(name)
     return attribute(*args, **kwargs) if callable(attribute) else attribute
+
+
+def check_spaces_match(envs: Sequence[gymnasium.Env]) -> None:
+    """Checks that every env has the observation and action spaces of `envs[0]`.
+
+    Raises:
+      ValueError: naming the first sub-environment whose space differs.
+    """
+    first = envs[0]
+    for i, env in enumerate(envs):
+        for name in ("observation_space", "action_space"):
+            if getattr(env, name) != getattr(first, name):
+                raise ValueError(
+                    f"sub-environment {i}: {name.replace('_', ' ')} {getattr(env, name)} "
+                    f"differs from sub-environment 0's {getattr(first, name)}"
+                )
 
 
 def _set_sub_env_attr(env: gymnasium.Env, name: str, value: Any) -> None:
