@@ -86,6 +86,8 @@ def _serve(worker: _Worker, call: _Call) -> None:
                     errors[i] = error
                     call.failed = True
         done.release()
+        if call.stopping:  # `close` gave up waiting for this call
+            return
 
 
 def _check_count(name: str, value: Any, alternative: str = "") -> int:
