@@ -6,11 +6,13 @@ Slot i belongs to share `i % k`; share 0 is run by the thread that made the pool
 changes (what an OpenGL context bound to a thread needs), at k = 1 nothing is handed to
 another thread at all, and the calling thread steps a share instead of waiting idle.
 
-The hand-off is the cheapest one measured on a 2-core machine (see
-`benchmarks/vector_env.py`, which measures it): each worker sleeps on a `threading.Lock`
-of its own that the caller releases to start it, and releases a second lock of its own
-when its share is done, which the caller acquires. Only workers whose share has a slot
-in the call are woken. A call allocates nothing but the dict of results it returns.
+The hand-off is the cheapest of those `benchmarks/thread_pool.py` compares (a
+`threading.Barrier`, per-worker `threading.Event`s, spinning before sleeping, the queues
+this pool replaced): each worker sleeps on a `threading.Lock` of its own, which the
+caller releases to start it, and releases a second lock of its own when its share is
+done, which the caller acquires. Only workers with a slot in the call are woken. The
+state shared with the workers is allocated once; a call makes no queue, job or closure,
+only the dict of results it returns.
 """
 
 import math
