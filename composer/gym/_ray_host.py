@@ -4,9 +4,9 @@
 into a Ray actor with `ray.remote`. The host keeps its sub-environments on a
 `PinnedThreadPool` (the actor's own thread steps one share), so that one actor call
 steps all of them and Ray's per-call cost is paid once per actor, not per
-sub-environment. A sub-environment
-that raises does not stop the others: its error comes back, in place of its result, as
-a `SubEnvFailure`, which the caller raises as a `SubEnvironmentError`.
+sub-environment. A sub-environment that raises does not stop the others: its error
+comes back, in place of its result, as a `SubEnvFailure`, which the caller raises as a
+`SubEnvironmentError`.
 
 A call's arguments and results cross the process boundary as one pickled `bytes` each
 (`pack`, `unpack`): Ray hands a `bytes` over as it is, where it would serialise each of
