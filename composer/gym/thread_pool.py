@@ -131,7 +131,7 @@ class PinnedThreadPool:
             for s in range(1, self.num_threads)
         ]
         self._wanted = [False] * self.num_threads
-        self._busy = False  # a call started and not finished: the owner was interrupted
+        self._busy = False  # a call is under way, or one was left unfinished
         self._closed = False
 
     @property
@@ -177,14 +177,15 @@ class PinnedThreadPool:
             self._finish_interrupted()
         call, wanted, k = self._call, self._wanted, self.num_threads
         selected = call.selected
+        # Busy until the call is done: an interrupted call is cleaned up by the next one.
+        self._busy = True
         for i in indices:
             if not 0 <= i < self.size:
-                self._clear(range(self.size))
+                self._finish_interrupted()
                 raise IndexError(f"indices: expected slots in range(0, {self.size}), got {i}")
             selected[i] = True
             wanted[i % k] = True
         call.task = task
-        self._busy = True
         self._start_workers()
         self._run_own_share(task)
         self._wait_for_workers()
@@ -259,7 +260,8 @@ class PinnedThreadPool:
                 call.failed = True
 
     def _finish_interrupted(self) -> None:
-        """Waits for the workers of a call the owner was interrupted in, and drops it."""
+        """Waits for the workers of a call left unfinished (the owner was interrupted, or
+        an index was bad), and drops its results."""
         self._wait_for_workers()
         self._busy = False
         self._call.task = None
