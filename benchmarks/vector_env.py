@@ -12,6 +12,8 @@ Rows:
     in a loop, both with autoreset (targets: >= 0.97x at N = 1); the same for
     `gymnasium.vector.AsyncVectorEnv` (one process per sub-environment), and
     threaded / async.
+  free ceiling: one thread per core, each calling raw `mj_step(model, data, 20)` on its
+    own `MjData` with no hand-off at all / one thread doing the same calls.
   lock-step ceiling N: a plain script, no environment: k = min(N, cores) threads (the
     main one included) each calling `mujoco.mj_step(model, data, 20)` on a fixed share of
     N `MjData`, between two `threading.Barrier` waits per vector step / the same calls
