@@ -1,4 +1,4 @@
-"""Gymnasium adapter overhead and threaded vector env throughput, as ratios from one run.
+"""Gymnasium adapter overhead and vector env throughput, as ratios from one run.
 
 Task: manipulation `lift_brick_features` (20 physics steps per control step).
 
@@ -7,32 +7,36 @@ Rows:
     speed-up two threads could reach at most with that much serial work (Amdahl).
   adapter: `GymnasiumEnv.step` / `composer.Environment.step`, from the same states with
     the same actions, steps interleaved (median of per-trial ratios; target <= 1.05).
-  ceiling: T threads each calling raw `mujoco.mj_step(model, data, 20)` on its own
-    `MjData` / one thread doing the same calls (T = 2, cores, and min(N, cores)): what
-    threads can give at best on this machine. "Free": each thread runs all its steps;
-    "lock step": the threads are handed one control step at a time and waited for, as
-    in any vector env. While other processes keep the cores busy, the operating system
-    tends to run briefly sleeping threads one after another on the same core, so the
-    lock-step ceiling can fall far below the free one.
-  threaded N: `ThreadedVectorEnv` of N sub-environments (one thread per core) in
-    environment steps per second / one `GymnasiumEnv` stepped in a loop, both with
-    autoreset (target >= 1.6 at N = 2 on 2 cores), also as a share of the lock-step
-    ceiling for min(N, cores) threads; the same for
+  threaded N: `ThreadedVectorEnv` of N sub-environments (one thread per core, the
+    calling one included) in environment steps per second / one `GymnasiumEnv` stepped
+    in a loop, both with autoreset (targets: >= 0.97x at N = 1); the same for
     `gymnasium.vector.AsyncVectorEnv` (one process per sub-environment), and
-    threaded / async (target > 1 at every N).
-  ray N: `RayVectorEnv` of N sub-environments in actors of N / cores sub-environments
-    (one actor per core, on a local Ray started by the benchmark), its
-    steps/s next to the loop's and the threaded env's from the same trials, ray /
-    threaded (target >= 0.7), and Ray's cost per vector step: 1 / (ray vector steps/s)
-    - 1 / (threaded vector steps/s), in ms. Skipped when Ray is not installed or with
-    --no-ray.
+    threaded / async.
+  free ceiling: one thread per core, each calling raw `mj_step(model, data, 20)` on its
+    own `MjData` with no hand-off at all / one thread doing the same calls.
+  lock-step ceiling N: a plain script, no environment: k = min(N, cores) threads (the
+    main one included) each calling `mujoco.mj_step(model, data, 20)` on a fixed share of
+    N `MjData`, between two `threading.Barrier` waits per vector step / the same calls
+    on one thread. What a vector env that steps in lock step can reach at best on this
+    machine; "of ceiling" is threaded/loop over it (target >= 95% at N = 4 and 8).
+  ray N: `RayVectorEnv` of N sub-environments in actors of ceil(N / cores)
+    sub-environments (one actor per core, on a local Ray started by the benchmark), its
+    steps/s next to the loop's and the threaded env's from the same trials; Ray's cost
+    per vector step, 1 / (ray vector steps/s) - 1 / (threaded vector steps/s), next to
+    an empty round trip to as many actors (a call that returns its argument, to each
+    actor at once), measured in the same trials (target: cost <= 1.5x the round trip).
+  ray envs per actor: the largest N in actors of 1, 2, 4, ... sub-environments (an
+    actor with c cores' worth of the machine steps its share on c threads).
+    Skipped, like the ray rows, when Ray is not installed or with --no-ray.
 
-Throughputs are medians over `--repeats` trials of `--steps` vector steps each, taken
-in turn so that load from other processes spreads over all rows; ratios are medians of
-the ratios within each trial. On a machine shared
-with other work the ratios are noisy.
+Throughputs are medians over `--repeats` trials of `--steps` vector steps each; in each
+trial every row of every N is measured in turn, so that load from other processes
+spreads over all rows; ratios are medians of the ratios within each trial. The number
+of cores and the 1-minute load average are printed with the tables: on a machine
+shared with other work the ratios are noisy.
 
-Usage: python benchmarks/vector_env.py [--steps N] [--repeats N] [--sizes 1,2,4,8] [--no-ray]
+Usage: python benchmarks/vector_env.py [--steps N] [--repeats K] [--sizes 1,2,4,8]
+    [--no-ray] [--envs-per-actor 1,2,4,8]
 """
 
 import argparse
@@ -40,7 +44,6 @@ import importlib.util
 import math
 import os
 import pathlib
-import queue
 import statistics
 import sys
 import threading
@@ -58,8 +61,9 @@ from composer.gym import GymnasiumEnv, RayVectorEnv, ThreadedVectorEnv  # noqa: 
 
 _TASK = "lift_brick_features"
 _ADAPTER_TARGET = 1.05
-_THREADED_TARGET = 1.6
-_RAY_TARGET = 0.7
+_SINGLE_TARGET = 0.97  # threaded / loop at N = 1
+_CEILING_TARGET = 0.95  # threaded / loop over the lock-step ceiling, at N = 4 and 8
+_RAY_TARGET = 1.5  # Ray's cost per vector step over an empty actor round trip
 
 
 def _make_env() -> GymnasiumEnv:
@@ -141,59 +145,87 @@ def python_share(steps: int, repeats: int) -> tuple[float, float]:
     return statistics.median(totals), statistics.median(pythons)
 
 
-def _raw_steps(model, data, steps: int) -> None:
-    for _ in range(steps):
-        mujoco.mj_step(model, data, 20)
-
-
-def _run_free(model, datas, steps: int) -> None:
-    workers = [threading.Thread(target=_raw_steps, args=(model, d, steps)) for d in datas]
-    for worker in workers:
-        worker.start()
-    for worker in workers:
-        worker.join()
-
-
-def _run_lock_step(model, datas, steps: int) -> None:
-    jobs = [queue.SimpleQueue() for _ in datas]
-    done = queue.SimpleQueue()
-
-    def work(data, inbox):
-        while inbox.get():
-            mujoco.mj_step(model, data, 20)
-            done.put(None)
-
-    workers = [threading.Thread(target=work, args=pair) for pair in zip(datas, jobs)]
-    for worker in workers:
-        worker.start()
-    for _ in range(steps):
-        for inbox in jobs:
-            inbox.put(True)
-        for _ in jobs:
-            done.get()
-    for inbox, worker in zip(jobs, workers):
-        inbox.put(False)
-        worker.join()
-
-
-def ceiling_ratios(threads: int, steps: int, repeats: int) -> tuple[float, float]:
-    """Steps/s of `threads` threads of raw mj_step / steps/s of one thread, with the
-    threads running free and in lock step (handed one control step at a time through
-    queues, and waited for, as a vector env does)."""
+def _load_model() -> tuple[mujoco.MjModel, int]:
+    """The task's model and its physics steps per control step."""
     env = manipulation.load(_TASK)
     model = env.physics.model.ptr
+    sub_steps = round(env.control_timestep() / env.physics.timestep())
+    env.close()
+    return model, sub_steps
+
+
+class LockStepCeiling:
+    """Raw `mj_step` on N `MjData`: one thread, and k threads in lock step (Barrier)."""
+
+    def __init__(self, num_envs: int, threads: int, steps: int):
+        self.model, self.sub_steps = _load_model()
+        self.datas = [mujoco.MjData(self.model) for _ in range(num_envs)]
+        self.threads = threads
+        self.steps = steps
+        self.ratios: list[float] = []
+
+    def _step_share(self, share: list) -> None:
+        for data in share:
+            mujoco.mj_step(self.model, data, self.sub_steps)
+
+    def _one_thread(self) -> float:
+        start = time.perf_counter()
+        for _ in range(self.steps):
+            self._step_share(self.datas)
+        return time.perf_counter() - start
+
+    def _lock_step(self) -> float:
+        k = self.threads
+        shares = [self.datas[s::k] for s in range(k)]
+        begin, end = threading.Barrier(k), threading.Barrier(k)
+
+        def work(share):
+            for _ in range(self.steps):
+                begin.wait()
+                self._step_share(share)
+                end.wait()
+
+        workers = [threading.Thread(target=work, args=(share,)) for share in shares[1:]]
+        for worker in workers:
+            worker.start()
+        start = time.perf_counter()
+        work(shares[0])
+        elapsed = time.perf_counter() - start
+        for worker in workers:
+            worker.join()
+        return elapsed
+
+    def trial(self) -> None:
+        single = self._one_thread()
+        self.ratios.append(single / self._lock_step() if self.threads > 1 else 1.0)
+
+    def median(self) -> float:
+        return statistics.median(self.ratios)
+
+
+def free_ceiling(threads: int, steps: int, repeats: int) -> float:
+    """Steps/s of `threads` threads each running raw mj_step on its own `MjData`, free of
+    any hand-off, / steps/s of one thread."""
+    model, sub_steps = _load_model()
     datas = [mujoco.MjData(model) for _ in range(threads)]
-    free, lock_step = [], []
+
+    def run(data):
+        for _ in range(steps):
+            mujoco.mj_step(model, data, sub_steps)
+
+    ratios = []
     for _ in range(repeats):
         start = time.perf_counter()
-        _raw_steps(model, datas[0], steps)
+        run(datas[0])
         single = time.perf_counter() - start
-        for runner, ratios in ((_run_free, free), (_run_lock_step, lock_step)):
-            start = time.perf_counter()
-            runner(model, datas, steps)
-            ratios.append(threads * single / (time.perf_counter() - start))
-    env.close()
-    return statistics.median(free), statistics.median(lock_step)
+        workers = [threading.Thread(target=run, args=(data,)) for data in datas]
+        start = time.perf_counter()
+        for worker in workers:
+            worker.start()
+        for worker in workers:
+            worker.join()
+        ratios.append(threads * single / (time.perf_counter() - start))
+    return statistics.median(ratios)
 
 
 def _loop_rate(env: GymnasiumEnv, actions: list) -> float:
@@ -212,12 +244,41 @@ def _vector_rate(envs: gymnasium.vector.VectorEnv, actions: list) -> float:
     return envs.num_envs * len(actions) / (time.perf_counter() - start)
 
 
-class Throughput:
-    """Environment steps per second of one loop, a threaded and an async vector env, and
-    with `use_ray` a Ray vector env of one actor per core."""
+class _Echo:
+    """A Ray actor's body that does nothing: `echo` returns its argument."""
 
-    def __init__(self, num_envs: int, steps: int, use_ray: bool):
+    def echo(self, data: bytes) -> bytes:
+        return data
+
+
+def _round_trip_rate(actors: list, steps: int) -> float:
+    """Round trips per second of one call to each actor at once, waited for together."""
+    import ray
+
+    start = time.perf_counter()
+    for _ in range(steps):
+        ray.get([actor.echo.remote(b"") for actor in actors])
+    return steps / (time.perf_counter() - start)
+
+
+def _ray_vector_env(num_envs: int, envs_per_actor: int, cpus_per_actor: int) -> RayVectorEnv:
+    # An actor steps its sub-environments on as many threads as it has CPUs (at least 1).
+    envs = RayVectorEnv(
+        [_make_env] * num_envs, envs_per_actor=envs_per_actor, num_cpus_per_actor=cpus_per_actor
+    )
+    envs.reset(seed=0)
+    return envs
+
+
+class Throughput:
+    """Environment steps per second of one loop, a threaded and an async vector env, the
+    lock-step ceiling for N sub-environments, and with `use_ray` a Ray vector env of one
+    actor per core and as many empty actors."""
+
+    def __init__(self, num_envs: int, steps: int, use_ray: bool, cores: int):
         self.num_envs = num_envs
+        self.steps = steps
+        self.ceiling = LockStepCeiling(num_envs, min(num_envs, cores), steps)
         self.single = _make_env()
         self.single.reset(seed=0)
         self.threaded = ThreadedVectorEnv([_make_env] * num_envs)
@@ -229,22 +290,25 @@ class Throughput:
         self.rates = {"loop": [], "threaded": [], "async": []}
         self.ray = None
         if use_ray:
-            cores = os.cpu_count() or 1
+            import ray
+
+            self.envs_per_actor = math.ceil(num_envs / cores)
             # No CPU reservation: the actors of every N live at once, on `cores` cores.
-            self.ray = RayVectorEnv(
-                [_make_env] * num_envs,
-                envs_per_actor=math.ceil(num_envs / cores),
-                num_cpus_per_actor=0,
-            )
-            self.ray.reset(seed=0)
+            self.ray = _ray_vector_env(num_envs, self.envs_per_actor, cpus_per_actor=0)
+            echo = ray.remote(_Echo).options(num_cpus=0)
+            self.echoes = [echo.remote() for _ in self.ray.actors]
+            _round_trip_rate(self.echoes, 1)  # the actors have started
             self.rates["ray"] = []
+            self.rates["round trip"] = []
 
     def trial(self) -> None:
+        self.ceiling.trial()
         self.rates["loop"].append(_loop_rate(self.single, self.single_actions))
         self.rates["threaded"].append(_vector_rate(self.threaded, self.vector_actions))
         self.rates["async"].append(_vector_rate(self.asynchronous, self.vector_actions))
         if self.ray is not None:
             self.rates["ray"].append(_vector_rate(self.ray, self.vector_actions))
+            self.rates["round trip"].append(_round_trip_rate(self.echoes, self.steps))
 
     def median(self, name: str) -> float:
         return statistics.median(self.rates[name])
@@ -254,12 +318,34 @@ class Throughput:
         pairs = zip(self.rates[numerator], self.rates[denominator])
         return statistics.median(a / b for a, b in pairs)
 
+    def of_ceiling(self) -> float:
+        """The median over trials of (threaded / loop) / lock-step ceiling."""
+        speedups = (t / loop for t, loop in zip(self.rates["threaded"], self.rates["loop"]))
+        return statistics.median(s / c for s, c in zip(speedups, self.ceiling.ratios))
+
+    def ray_cost_ms(self) -> list[float]:
+        """Per trial: ms per vector step that Ray adds to the threaded env's."""
+        n = self.num_envs
+        pairs = zip(self.rates["ray"], self.rates["threaded"])
+        return [(n / ray_rate - n / threaded) * 1e3 for ray_rate, threaded in pairs]
+
     def close(self) -> None:
         self.single.close()
         self.threaded.close()
         self.asynchronous.close()
         if self.ray is not None:
+            import ray
+
             self.ray.close()
+            for echo in self.echoes:
+                ray.kill(echo)
+
+
+def _table(header: tuple[str, ...], rows: list[tuple]) -> None:
+    print("| " + " | ".join(header) + " |")
+    print("|" + "---|" * len(header))
+    for row in rows:
+        print("| " + " | ".join(row) + " |")
 
 
 def main() -> None:
@@ -268,6 +354,11 @@ def main() -> None:
     parser.add_argument("--repeats", type=int, default=5, help="trials per measurement")
     parser.add_argument("--sizes", default="1,2,4,8", help="numbers of sub-environments")
     parser.add_argument("--no-ray", action="store_true", help="leave out the Ray rows")
+    parser.add_argument(
+        "--envs-per-actor",
+        default="1,2,4,8",
+        help="sub-environments per Ray actor to compare, for the largest size",
+    )
     args = parser.parse_args()
     cores = os.cpu_count() or 1
     sizes = [int(size) for size in args.sizes.split(",")]
@@ -275,9 +366,13 @@ def main() -> None:
     if use_ray:
         import ray
 
-        ray.init(num_cpus=cores, include_dashboard=False, log_to_driver=False)
+        # "local": a new Ray of this machine, whatever an earlier run left behind.
+        ray.init(address="local", num_cpus=cores, include_dashboard=False, log_to_driver=False)
 
-    print(f"task {_TASK}, {cores} cores, ThreadedVectorEnv with one thread per core")
+    print(
+        f"task {_TASK}, {cores} cores, 1-minute load average {os.getloadavg()[0]:.2f} "
+        f"at the start; {args.repeats} trials of {args.steps} vector steps, medians"
+    )
     adapter = adapter_ratio(args.steps * 2, args.repeats)
     verdict = "ok" if adapter <= _ADAPTER_TARGET else "MISSED"
     print(
@@ -290,74 +385,107 @@ def main() -> None:
         f"({python / total:.0%}); Amdahl bound for 2 threads "
         f"{1 / (python / total + (1 - python / total) / 2):.2f}x"
     )
-    ceilings = {1: 1.0}
-    for threads in sorted({2, cores, *(min(size, cores) for size in sizes)} - {1}):
-        free, lock_step = ceiling_ratios(threads, args.steps * 2, args.repeats)
-        ceilings[threads] = lock_step
-        print(
-            f"ceiling: {threads} threads of raw mj_step(m, d, 20) / 1 thread = {free:.2f}x "
-            f"running free, {lock_step:.2f}x in lock step"
-        )
+    free = free_ceiling(cores, args.steps * 2, args.repeats)
+    print(f"free ceiling: {cores} threads of raw mj_step, no hand-off / 1 thread = {free:.2f}x")
 
-    benches = [Throughput(size, args.steps, use_ray) for size in sizes]
+    benches = [Throughput(size, args.steps, use_ray, cores) for size in sizes]
     for _ in range(args.repeats):
         for bench in benches:
             bench.trial()
-    print()
-    header = (
-        "N",
-        "loop steps/s",
-        "threaded steps/s",
-        "async steps/s",
-        "threaded/loop",
-        "of lock-step ceiling",
-        "async/loop",
-        "threaded/async",
-    )
-    print("| " + " | ".join(header) + " |")
-    print("|" + "---|" * len(header))
+    print(f"\n1-minute load average after the trials: {os.getloadavg()[0]:.2f}\n")
+    rows = []
     for bench in benches:
         loop, threaded, asynchronous = (bench.median(n) for n in ("loop", "threaded", "async"))
-        speedup = bench.ratio("threaded", "loop")
-        ceiling = ceilings[min(bench.num_envs, cores)]
-        print(
-            f"| {bench.num_envs} | {loop:.0f} | {threaded:.0f} | {asynchronous:.0f} | "
-            f"{speedup:.2f}x | {speedup / ceiling:.0%} | "
-            f"{bench.ratio('async', 'loop'):.2f}x | {bench.ratio('threaded', 'async'):.2f}x |"
+        rows.append(
+            (
+                f"{bench.num_envs}",
+                f"{loop:.0f}",
+                f"{threaded:.0f}",
+                f"{asynchronous:.0f}",
+                f"{bench.ratio('threaded', 'loop'):.2f}x",
+                f"{bench.ceiling.median():.2f}x",
+                f"{bench.of_ceiling():.0%}",
+                f"{bench.ratio('async', 'loop'):.2f}x",
+                f"{bench.ratio('threaded', 'async'):.2f}x",
+            )
         )
+    _table(
+        (
+            "N",
+            "loop steps/s",
+            "threaded steps/s",
+            "async steps/s",
+            "threaded/loop",
+            "lock-step ceiling",
+            "threaded of ceiling",
+            "async/loop",
+            "threaded/async",
+        ),
+        rows,
+    )
     print(
-        f"\ntargets: threaded/loop >= {_THREADED_TARGET} at N = 2 on 2 cores; "
-        "threaded/async > 1 at every N"
+        f"\ntargets: threaded/loop >= {_SINGLE_TARGET}x at N = 1; threaded >= "
+        f"{_CEILING_TARGET:.0%} of the lock-step ceiling at N = 4 and 8"
     )
     if use_ray:
-        _print_ray_table(benches, cores)
+        _print_ray_table(benches)
+        _print_envs_per_actor(max(sizes), args, cores)
     for bench in benches:
         bench.close()
 
 
-def _print_ray_table(benches: list[Throughput], cores: int) -> None:
+def _print_ray_table(benches: list[Throughput]) -> None:
     print()
-    header = (
-        "N",
-        "envs per actor",
-        "loop steps/s",
-        "threaded steps/s",
-        "ray steps/s",
-        "ray/loop",
-        "ray/threaded",
-        "ray cost ms per vector step",
-    )
-    print("| " + " | ".join(header) + " |")
-    print("|" + "---|" * len(header))
+    rows = []
     for bench in benches:
         loop, threaded, ray_rate = (bench.median(n) for n in ("loop", "threaded", "ray"))
-        cost = (bench.num_envs / ray_rate - bench.num_envs / threaded) * 1e3
-        print(
-            f"| {bench.num_envs} | {math.ceil(bench.num_envs / cores)} | {loop:.0f} | "
-            f"{threaded:.0f} | {ray_rate:.0f} | {bench.ratio('ray', 'loop'):.2f}x | "
-            f"{bench.ratio('ray', 'threaded'):.2f}x | {cost:.2f} |"
+        costs = bench.ray_cost_ms()
+        trips = [1e3 / rate for rate in bench.rates["round trip"]]
+        rows.append(
+            (
+                f"{bench.num_envs}",
+                f"{bench.envs_per_actor}",
+                f"{loop:.0f}",
+                f"{threaded:.0f}",
+                f"{ray_rate:.0f}",
+                f"{bench.ratio('ray', 'threaded'):.2f}x",
+                f"{statistics.median(costs):.2f}",
+                f"{statistics.median(trips):.2f}",
+                f"{statistics.median(c / t for c, t in zip(costs, trips)):.2f}x",
+            )
         )
-    print(f"\ntarget: ray/threaded >= {_RAY_TARGET} with one actor per core")
+    _table(
+        (
+            "N",
+            "envs per actor",
+            "loop steps/s",
+            "threaded steps/s",
+            "ray steps/s",
+            "ray/threaded",
+            "ray cost ms per vector step",
+            "empty round trip ms",
+            "cost / round trip",
+        ),
+        rows,
+    )
+    print(f"\ntarget: Ray's cost per vector step <= {_RAY_TARGET}x an empty round trip")
+
+
+def _print_envs_per_actor(num_envs: int, args: argparse.Namespace, cores: int) -> None:
+    """Throughput of `num_envs` sub-environments for each of `--envs-per-actor`: actors
+    reserve the machine's cores among them (at least one each), one thread per core."""
+    counts = [int(c) for c in args.envs_per_actor.split(",") if int(c) <= num_envs]
+    rows = []
+    for count in counts:
+        actors = math.ceil(num_envs / count)
+        cpus = max(1, cores // actors) if actors <= cores else 0
+        envs = _ray_vector_env(num_envs, count, cpus_per_actor=cpus)
+        actions = _actions(envs.action_space, args.steps, seed=3)
+        rates = [_vector_rate(envs, actions) for _ in range(args.repeats)]
+        envs.close()
+        rows.append((f"{count}", f"{actors}", f"{cpus}", f"{statistics.median(rates):.0f}"))
+    print(f"\nray, N = {num_envs}, 1-minute load average {os.getloadavg()[0]:.2f}\n")
+    _table(("envs per actor", "actors", "CPUs per actor", "ray steps/s"), rows)
 
 
 if __name__ == "__main__":

@@ -2,10 +2,11 @@
 
 `SubEnvHost` is plain Python (this module never imports Ray); `RayVectorEnv` turns it
 into a Ray actor with `ray.remote`. The host keeps its sub-environments on a
-`ThreadedVectorEnv`, so that one actor call steps all of them (on its own threads) and
-Ray's per-call cost is paid once per actor, not per sub-environment. A sub-environment
-that raises does not stop the others: its error comes back, in place of its result, as
-a `SubEnvFailure`, which the caller raises as a `SubEnvironmentError`.
+`PinnedThreadPool` (the actor's own thread steps one share), so that one actor call
+steps all of them and Ray's per-call cost is paid once per actor, not per
+sub-environment. A sub-environment that raises does not stop the others: its error
+comes back, in place of its result, as a `SubEnvFailure`, which the caller raises as a
+`SubEnvironmentError`.
 
 A call's arguments and results cross the process boundary as one pickled `bytes` each
 (`pack`, `unpack`): Ray hands a `bytes` over as it is, where it would serialise each of
@@ -19,8 +20,8 @@ from typing import Any, NamedTuple
 
 import gymnasium
 
-from composer.gym.batched import SubEnvironmentError
-from composer.gym.threaded import ThreadedVectorEnv
+from composer.gym.batched import SubEnvironmentError, check_spaces_match
+from composer.gym.thread_pool import PinnedThreadPool
 
 __all__ = ["HostSpec", "SubEnvFailure", "SubEnvHost", "pack", "unpack"]
 
@@ -81,22 +82,34 @@ def _guarded(env: gymnasium.Env, function: Callable[..., Any], arguments: tuple)
 class SubEnvHost:
     """Builds `env_fns` on `num_threads` threads and runs functions on the sub-envs.
 
-    Sub-environments are numbered 0..len(env_fns)-1 within the host.
+    Sub-environments are numbered 0..len(env_fns)-1 within the host. Ray runs every
+    method of an actor on one thread, the pool's owner.
     """
 
     def __init__(self, env_fns: Sequence[Callable[[], gymnasium.Env]], num_threads: int):
         self._env_fns = list(env_fns)
         self._num_threads = num_threads
-        self._vector: ThreadedVectorEnv | None = None
+        self._pool: PinnedThreadPool | None = None
+        self._envs: list[gymnasium.Env] = []
 
     def build(self) -> HostSpec | dict[int, SubEnvFailure]:
         """Builds the sub-environments; returns their spaces, or {index: failure} for the
         first factory that raised (other errors, such as spaces that differ, raise)."""
+        env_fns = self._env_fns
+        self._pool = PinnedThreadPool(len(env_fns), self._num_threads, name="SubEnvHost")
         try:
-            self._vector = ThreadedVectorEnv(self._env_fns, self._num_threads)
+            built = self._pool.run(lambda i: env_fns[i](), range(len(env_fns)))
         except SubEnvironmentError as error:  # the caller raises it, with the global index
+            self.close()
             return {error.index: _failure(error.__cause__)}
-        first = self._vector.envs[0]
+        self._envs = [built[i] for i in range(len(env_fns))]
+        try:
+            for i, env in enumerate(self._envs):
+                check_spaces_match(i, env, self._envs[0])
+        except ValueError:
+            self.close()
+            raise
+        first = self._envs[0]
         return HostSpec(
             first.observation_space, first.action_space, dict(first.metadata), first.render_mode
         )
@@ -105,11 +118,22 @@ class SubEnvHost:
         """For `call` = pack((function, arguments)), returns pack({i: function(sub_env_i,
         *arguments[i])}), with a `SubEnvFailure` where it raised."""
         function, arguments = unpack(call)
-        guarded = {i: (function, args) for i, args in arguments.items()}
-        return pack(self._vector._map(_guarded, guarded))
+        envs = self._envs
+        try:
+            return pack(
+                self._pool.run(lambda i: _guarded(envs[i], function, arguments[i]), arguments)
+            )
+        except SubEnvironmentError as error:  # a worker thread died (`WorkerDiedError`)
+            return pack({error.index: _failure(error.__cause__)})
 
     def close(self) -> None:
         """Closes the sub-environments and stops the threads."""
-        if self._vector is not None:
-            self._vector.close()
-            self._vector = None
+        if self._pool is None:
+            return
+        envs, pool = self._envs, self._pool
+        self._envs, self._pool = [], None
+        try:
+            if envs:
+                pool.run(lambda i: envs[i].close(), range(len(envs)))
+        finally:
+            pool.close()

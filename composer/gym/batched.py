@@ -126,12 +126,20 @@ def _close_sub_env(env: gymnasium.Env) -> None:
     env.close()
 
 
-def _copy_batch(batch):
+def _batch_copier(batch) -> Callable[[], Any]:
+    """A function returning a copy of `batch` (an array, or dict/tuple of them).
+
+    Built once per vector env: walking the structure anew on every step costs twice
+    as much, and it runs on every step of every vector env.
+    """
     if isinstance(batch, dict):
-        return type(batch)((key, _copy_batch(part)) for key, part in batch.items())
+        kind = type(batch)
+        parts = [(key, _batch_copier(part)) for key, part in batch.items()]
+        return lambda: kind({key: copy() for key, copy in parts})
     if isinstance(batch, tuple):
-        return tuple(_copy_batch(part) for part in batch)
-    return batch.copy()
+        copiers = [_batch_copier(part) for part in batch]
+        return lambda: tuple(copy() for copy in copiers)
+    return batch.copy
 
 
 def read_row(batch, index: int):
@@ -143,15 +151,26 @@ def read_row(batch, index: int):
     return batch[index].copy()
 
 
-def _write_row(batch, index: int, value) -> None:
+def _row_writer(batch) -> Callable[[int, Any], None]:
+    """A function `write(index, value)` that writes `value` into row `index` of `batch`
+    (an array, or dict/tuple of them); built once, as `_batch_copier`."""
     if isinstance(batch, dict):
-        for key, part in batch.items():
-            _write_row(part, index, value[key])
-    elif isinstance(batch, tuple):
-        for part, item in zip(batch, value):
-            _write_row(part, index, item)
-    else:
-        batch[index] = value
+        parts = [(key, _row_writer(part)) for key, part in batch.items()]
+
+        def write_dict(index: int, value) -> None:
+            for key, write_part in parts:
+                write_part(index, value[key])
+
+        return write_dict
+    if isinstance(batch, tuple):
+        writers = [_row_writer(part) for part in batch]
+
+        def write_tuple(index: int, value) -> None:
+            for write_part, item in zip(writers, value):
+                write_part(index, item)
+
+        return write_tuple
+    return batch.__setitem__
 
 
 class BatchedVectorEnv(VectorEnv):
@@ -196,6 +215,8 @@ class BatchedVectorEnv(VectorEnv):
         self.observation_space = batch_space(single_observation_space, num_envs)
         self.action_space = batch_space(single_action_space, num_envs)
         self._observations = create_empty_array(single_observation_space, num_envs, fn=np.zeros)
+        self._write_observation = _row_writer(self._observations)
+        self._copy_observations = _batch_copier(self._observations)
         self._rewards = np.zeros(num_envs, dtype=np.float64)
         self._terminations = np.zeros(num_envs, dtype=np.bool_)
         self._truncations = np.zeros(num_envs, dtype=np.bool_)
@@ -362,7 +383,7 @@ class BatchedVectorEnv(VectorEnv):
 
     def _store(self, index: int, outcome: SubEnvOutcome) -> None:
         """Writes one sub-environment's outcome into row `index` of the batched arrays."""
-        _write_row(self._observations, index, outcome.observation)
+        self._write_observation(index, outcome.observation)
         self._rewards[index] = outcome.reward
         self._terminations[index] = outcome.terminated
         self._truncations[index] = outcome.truncated
@@ -372,7 +393,7 @@ class BatchedVectorEnv(VectorEnv):
         ) and outcome.final_info is None
 
     def _observations_out(self):
-        return _copy_batch(self._observations) if self.copy else self._observations
+        return self._copy_observations() if self.copy else self._observations
 
     def _batched_infos(self, outcomes: dict[int, SubEnvOutcome]) -> dict[str, Any]:
         infos: dict[str, Any] = {}

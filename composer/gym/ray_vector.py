@@ -36,7 +36,6 @@ an actor that dies while starting raises `RuntimeError`, the vector env closed l
 
 import functools
 import math
-import numbers
 import time
 from collections.abc import Callable, Sequence
 from typing import Any, NamedTuple, NoReturn
@@ -54,6 +53,7 @@ from composer.gym.batched import (
     reset_sub_env,
     step_sub_env,
 )
+from composer.utils import argument_checks
 
 __all__ = ["RayVectorEnv"]
 
@@ -79,7 +79,7 @@ def _env_fns_for(
     if isinstance(env_fns, str):
         if num_envs is None:
             raise ValueError(f"num_envs: expected an integer >= 1 for the id {env_fns!r}, got None")
-        _check_count("num_envs", num_envs, minimum=1)
+        argument_checks.integer(num_envs=num_envs)
         # The spec (not the id) travels: its entry point imports the registering module
         # in the actor's process, where the id is not registered.
         return [functools.partial(gymnasium.make, gymnasium.spec(env_fns))] * num_envs
@@ -91,16 +91,6 @@ def _env_fns_for(
             f"num_envs: expected None or len(env_fns) = {len(env_fns)}, got {num_envs!r}"
         )
     return env_fns
-
-
-def _check_count(name: str, value: Any, minimum: int) -> None:
-    if isinstance(value, bool) or not isinstance(value, numbers.Integral) or value < minimum:
-        raise ValueError(f"{name}: expected an integer >= {minimum}, got {value!r}")
-
-
-def _check_seconds(name: str, value: Any) -> None:
-    if isinstance(value, bool) or not isinstance(value, numbers.Real) or not 0 < value < math.inf:
-        raise ValueError(f"{name}: expected a number of seconds > 0, got {value!r}")
 
 
 class _Gathered(NamedTuple):
@@ -173,18 +163,11 @@ class RayVectorEnv(BatchedVectorEnv):
     ):
         env_fns = _env_fns_for(env_fns, num_envs)
         if envs_per_actor is not None:
-            _check_count("envs_per_actor", envs_per_actor, minimum=1)
-        if num_cpus_per_actor is not None and (
-            isinstance(num_cpus_per_actor, bool)
-            or not isinstance(num_cpus_per_actor, numbers.Real)
-            or num_cpus_per_actor < 0
-        ):
-            raise ValueError(
-                f"num_cpus_per_actor: expected a number >= 0 or None, got {num_cpus_per_actor!r}"
-            )
-        _check_count("max_restarts", max_restarts, minimum=0)
-        _check_seconds("start_timeout", start_timeout)
-        _check_seconds("call_timeout", call_timeout)
+            argument_checks.integer(envs_per_actor=envs_per_actor)
+        argument_checks.number(at_least=0, or_none=True, num_cpus_per_actor=num_cpus_per_actor)
+        argument_checks.integer(0, max_restarts=max_restarts)
+        argument_checks.number(above=0, unit="seconds", start_timeout=start_timeout)
+        argument_checks.number(above=0, unit="seconds", call_timeout=call_timeout)
         ray = _import_ray()
         if not ray.is_initialized():
             ray.init(address="local" if address is None else address)

@@ -63,11 +63,15 @@ _TWO = [functools.partial(CounterEnv, 3)] * 2
         ((_TWO,), {"envs_per_actor": 0}, "envs_per_actor: expected an integer >= 1, got 0"),
         ((_TWO,), {"num_cpus_per_actor": -1}, "num_cpus_per_actor: expected a number >= 0"),
         ((_TWO,), {"max_restarts": -1}, "max_restarts: expected an integer >= 0, got -1"),
-        ((_TWO,), {"start_timeout": 0}, "start_timeout: expected a number of seconds > 0, got 0"),
+        (
+            (_TWO,),
+            {"start_timeout": 0},
+            "start_timeout: expected a positive number (seconds), got 0",
+        ),
         (
             (_TWO,),
             {"call_timeout": float("inf")},
-            "call_timeout: expected a number of seconds > 0, got inf",
+            "call_timeout: expected a positive number (seconds), got inf",
         ),
         ((_TWO, 3), {}, r"num_envs: expected None or len\(env_fns\) = 2, got 3"),
         (([],), {}, "env_fns: expected at least one environment factory, got none"),

@@ -29,6 +29,47 @@ def _worker_threads(ignore=()):
     ]
 
 
+class _ThreadRecorder(gymnasium.Env):
+    """Records the thread of each call: built, reset, stepped, rendered and closed."""
+
+    observation_space = gymnasium.spaces.Box(-1.0, 1.0, (1,))
+    action_space = gymnasium.spaces.Box(-1.0, 1.0, (1,))
+    render_mode = "rgb_array"
+
+    def __init__(self):
+        self.threads = [threading.get_ident()]
+
+    def reset(self, *, seed=None, options=None):
+        self.threads.append(threading.get_ident())
+        return np.zeros(1, dtype=np.float32), {}
+
+    def step(self, action):
+        self.threads.append(threading.get_ident())
+        return np.zeros(1, dtype=np.float32), 0.0, False, False, {}
+
+    def render(self):
+        self.threads.append(threading.get_ident())
+
+    def close(self):
+        self.threads.append(threading.get_ident())
+
+
+def test_each_sub_env_lives_on_one_thread_and_the_callers_share_on_the_caller():
+    envs = ThreadedVectorEnv([_ThreadRecorder] * 4, num_threads=2)
+    envs.reset(seed=0)
+    for _ in range(3):
+        envs.step(np.zeros((4, 1)))
+    envs.reset(options={"reset_mask": np.array([False, True, False, False])})
+    envs.render()
+    sub_envs = envs.envs
+    envs.close()
+    threads = [set(env.threads) for env in sub_envs]
+    assert [len(env.threads) for env in sub_envs] == [7, 8, 7, 7]
+    assert threads[0] == threads[2] == {threading.get_ident()}
+    assert threads[1] == threads[3] != threads[0]
+    assert len(threads[1]) == 1
+
+
 def test_is_a_gymnasium_vector_env_with_batched_spaces():
     envs = ThreadedVectorEnv(_counters([3, 3, 3]), num_threads=2)
     assert isinstance(envs, gymnasium.vector.VectorEnv)
@@ -182,7 +223,8 @@ def test_close_closes_the_sub_envs_and_joins_the_threads():
     envs = ThreadedVectorEnv(
         [lambda: GymnasiumEnv(manipulation.load("reach_site_features"))] * 2, num_threads=2
     )
-    assert len(_worker_threads(earlier)) == 2
+    # Two threads step the sub-environments: this one and one worker.
+    assert len(_worker_threads(earlier)) == 1
     sub_envs = envs.envs
     envs.close()
     assert envs.closed
