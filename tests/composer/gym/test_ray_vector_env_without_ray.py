@@ -66,12 +66,12 @@ _TWO = [functools.partial(CounterEnv, 3)] * 2
         (
             (_TWO,),
             {"start_timeout": 0},
-            "start_timeout: expected a positive number (seconds), got 0",
+            r"start_timeout: expected a positive number \(seconds\), got 0",
         ),
         (
             (_TWO,),
             {"call_timeout": float("inf")},
-            "call_timeout: expected a positive number (seconds), got inf",
+            r"call_timeout: expected a positive number \(seconds\), got inf",
         ),
         ((_TWO, 3), {}, r"num_envs: expected None or len\(env_fns\) = 2, got 3"),
         (([],), {}, "env_fns: expected at least one environment factory, got none"),
