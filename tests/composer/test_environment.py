@@ -350,13 +350,28 @@ def test_a_time_limit_between_two_steps_warns_naming_both_and_ends_at_the_later_
         "ends at the first step that reaches it, after 2 steps at t=0.08 s; use a multiple "
         "of the control timestep (0.04 s or 0.08 s) to end episodes at the time limit"
     ]
-    assert record[0].filename == __file__
     env.reset()
     assert [env.step(np.zeros(2)).step_type for _ in range(2)] == [
         dm_env.StepType.MID,
         dm_env.StepType.LAST,
     ]
     assert env.physics.data.time == pytest.approx(0.08)
+
+
+def test_the_time_limit_warning_points_at_the_line_that_built_the_environment():
+    with pytest.warns(UserWarning) as record:
+        _every_40ms(0.05)
+    assert record[0].filename == __file__
+
+
+def test_a_time_limit_just_past_one_step_names_one_step_and_its_single_multiple():
+    with pytest.warns(UserWarning) as record:
+        _every_40ms(0.03)
+    assert str(record[0].message) == (
+        "time_limit=0.03 s is not a multiple of the control timestep 0.04 s: an episode "
+        "ends at the first step that reaches it, after 1 step at t=0.04 s; use a multiple "
+        "of the control timestep (0.04 s) to end episodes at the time limit"
+    )
 
 
 def test_the_time_limit_warning_is_given_once_per_environment():

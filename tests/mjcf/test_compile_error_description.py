@@ -72,3 +72,11 @@ def test_a_longer_line_is_cut_to_500_characters():
     line = _line_of_length(501)
     described = _describe(f"<mujoco><worldbody>\n{line}\n</worldbody></mujoco>")
     assert described.endswith(f"\nOffending XML: {line[:500]} ...")
+
+
+def test_a_line_number_outside_the_xml_quotes_no_line():
+    # MuJoCo numbers lines from 1; a line 0 (or past the end) must not quote another line.
+    xml = '<mujoco>\n  <worldbody/>\n  <geom name="last"/>\n</mujoco>'
+    for number in (0, 5):
+        description = _describe_compile_error(f"Error: bad value\nline {number}", xml)
+        assert "Offending XML" not in description, number
