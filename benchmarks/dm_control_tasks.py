@@ -1,21 +1,21 @@
 """dm_control's own manipulation and Control Suite tasks: this project + mujoco 4 vs
 dm_control 1.0.50 + 3.17.
 
-Usage: ``python benchmarks/dm_control_tasks.py [--trials 3] [--steps 200] [--resets 5]
-[--tasks NAME ...] [--sections manipulation suite]``
+Usage: `python benchmarks/dm_control_tasks.py [--trials 3] [--steps 200] [--resets 5]
+[--tasks NAME ...] [--sections manipulation suite]`
 
-Builds two scratch venvs under ``.cache/dm_control_tasks`` (once): real dm_control 1.0.50 on
-mujoco 3.17.0, and dm_control 1.0.50 whose ``composer``/``mjcf`` are served by this project
-(``composer.dm_control_compat``) on the project's mujoco. The same unmodified task code, seeds
+Builds two scratch venvs under `.cache/dm_control_tasks` (once): real dm_control 1.0.50 on
+mujoco 3.17.0, and dm_control 1.0.50 whose `composer`/`mjcf` are served by this project
+(`composer.dm_control_compat`) on the project's mujoco. The same unmodified task code, seeds
 and random actions run in both; trials alternate between the two. Prints a table of reset ms
 and step ms (medians over trials), their ratio ours / dm_control, and each one's step time
-over the raw ``mj_step`` calls of the same steps (the framework's own overhead).
+over the raw `mj_step` calls of the same steps (the framework's own overhead).
 
-The suite section (``suite.load`` of ``SUITE_TASKS``; its ``rl.control.Environment`` and task
-code are dm_control's in both venvs, its ``dm_control.mujoco`` engine is ours in one) prints
-``env.step`` over raw ``mj_step`` of the same steps, the engine's share (``physics.step``
-over the same raw steps: what the engine adds to stepping), and ``suite.load`` over one raw
-``mujoco.MjModel.from_xml_string`` of the same XML and assets in the same process.
+The suite section (`suite.load` of `SUITE_TASKS`; its `rl.control.Environment` and task
+code are dm_control's in both venvs, its `dm_control.mujoco` engine is ours in one) prints
+`env.step` over raw `mj_step` of the same steps, the engine's share (`physics.step`
+over the same raw steps: what the engine adds to stepping), and `suite.load` over one raw
+`mujoco.MjModel.from_xml_string` of the same XML and assets in the same process.
 """
 
 from __future__ import annotations
@@ -172,7 +172,7 @@ for line in sys.stdin:
 
 class Timing(NamedTuple):
     """Median times of one implementation on one task, in milliseconds: a reset, an
-    ``env.step``, and the raw ``mj_step`` calls of the same step on the same state."""
+    `env.step`, and the raw `mj_step` calls of the same step on the same state."""
 
     reset_ms: float
     step_ms: float

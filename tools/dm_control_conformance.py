@@ -1,25 +1,25 @@
 """Runs dm_control 1.0.50's own tests, suite, manipulation and locomotion tasks here.
 
-Usage: ``python -m tools.dm_control_conformance [--floor 0.99] [--tasks-only | --tests-only]
-[--packages composer mjcf ...]``
+Usage: `python -m tools.dm_control_conformance [--floor 0.99] [--tasks-only | --tests-only]
+[--packages composer mjcf ...]`
 
-Builds a scratch venv under ``.cache/dm_control_conformance`` with this project and
-``dm-control==1.0.50`` installed from PyPI, copies the test files of dm_control's
-``composer``, ``mjcf``, ``entities``, ``suite``, ``mujoco``, ``rl`` and ``locomotion``
+Builds a scratch venv under `.cache/dm_control_conformance` with this project and
+`dm-control==1.0.50` installed from PyPI, copies the test files of dm_control's
+`composer`, `mjcf`, `entities`, `suite`, `mujoco`, `rl` and `locomotion`
 packages out of that install (nothing of dm_control is kept in the repository), and runs
-them with ``dm_control.composer`` / ``dm_control.mjcf`` / ``dm_control.mujoco`` served by
-this project through ``composer.dm_control_compat``. Exception types are checked, message
-wording is not. It then loads every ``dm_control.manipulation`` ``*_features`` task and
-``reach_site_vision``, every task of ``suite.ALL_TASKS`` (and renders a frame of each), the
-environments of ``locomotion.examples.basic_cmu_2019`` / ``basic_rodent_2020`` and
-``soccer.load(team_size=2)`` through the same redirect, from a working directory of its
+them with `dm_control.composer` / `dm_control.mjcf` / `dm_control.mujoco` served by
+this project through `composer.dm_control_compat`. Exception types are checked, message
+wording is not. It then loads every `dm_control.manipulation` `*_features` task and
+`reach_site_vision`, every task of `suite.ALL_TASKS` (and renders a frame of each), the
+environments of `locomotion.examples.basic_cmu_2019` / `basic_rodent_2020` and
+`soccer.load(team_size=2)` through the same redirect, from a working directory of its
 own, and runs each for a reset and 100 random steps (actions uniform within the action
 spec's bounds, within [-1, 1] where a bound is MuJoCo's "unbounded" 1e10); it compares a few
-suite trajectories with raw ``mj_step`` and runs the README's dm_control examples.
+suite trajectories with raw `mj_step` and runs the README's dm_control examples.
 
 Prints a per-file table with subtotals per package, the failing test ids with the known
 reasons, a per-task table and the totals; exits 1 when the test pass rate is below
-``--floor`` or a task fails.
+`--floor` or a task fails.
 """
 
 from __future__ import annotations
@@ -61,8 +61,8 @@ EXCLUDED_TEST_FILES = {
     "mujoco/index_test.py",
 }
 
-#: Folders of files that tests read relative to their own file (``suite/demos`` holds the
-#: motion-capture sample of ``parse_amc_test``).
+#: Folders of files that tests read relative to their own file (`suite/demos` holds the
+#: motion-capture sample of `parse_amc_test`).
 ASSET_FOLDERS = {"test_assets", "demos"}
 
 #: dm_control test helpers that its tests import under dm_control's names: they are
@@ -238,7 +238,7 @@ class FileResult(NamedTuple):
 
 
 def copy_tests(python: Path, packages: tuple[str, ...] = TESTED_PACKAGES) -> Path:
-    """Copies the test files and test assets of dm_control's ``packages`` out of the venv."""
+    """Copies the test files and test assets of dm_control's `packages` out of the venv."""
     location = subprocess.run(
         [
             str(python),
@@ -396,7 +396,7 @@ def print_test_table(results: list[FileResult], failing: list[str]) -> float:
 
 
 def print_trajectory_table(gaps: dict) -> int:
-    """Prints each suite trajectory's largest qpos difference from raw ``mj_step``; returns
+    """Prints each suite trajectory's largest qpos difference from raw `mj_step`; returns
     how many differ or failed."""
     print(f"\n{'suite task vs raw mj_step, same model':<45} max |qpos - raw qpos| over the run")
     failed = 0

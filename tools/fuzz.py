@@ -1,10 +1,10 @@
 """Differential MJCF fuzzer: our parse + compile against MuJoCo's parser on mutated models.
 
-Usage: ``python -m tools.fuzz N [--seed S] [--show K] [--timeout SECONDS]``
+Usage: `python -m tools.fuzz N [--seed S] [--show K] [--timeout SECONDS]`
 
 Builds N documents (mutations of the seed models in `tools.mjcf_differential`, and
-generated ones), compiles each with ``mujoco.MjModel.from_xml_path`` and with
-``mjcf.from_path`` + ``mjcf.Physics.from_mjcf_model``, and prints a table by mutation kind:
+generated ones), compiles each with `mujoco.MjModel.from_xml_path` and with
+`mjcf.from_path` + `mjcf.Physics.from_mjcf_model`, and prints a table by mutation kind:
 agreement, false rejections, silent acceptances, compiled differently, crashes (an exception
 outside the documented types, a dead worker or a hang) and unclear exceptions; then up to
 K examples of each disagreement. Documents run in a worker process so that a crash or a

@@ -1,16 +1,16 @@
 """Tests every supported MuJoCo minor release; prints release -> passed/failed/skipped.
 
-Usage: ``python -m tools.mujoco_versions [--releases 3.3 4.0] [--strict] [-- PYTEST_ARGS]``
+Usage: `python -m tools.mujoco_versions [--releases 3.3 4.0] [--strict] [-- PYTEST_ARGS]`
 
-Builds one venv per release under ``.cache/mujoco_versions/<version>`` (kept between runs;
-``--venvs`` puts them elsewhere), installs this project with its ``[test]`` extra and that
-``mujoco`` there, and runs ``pytest`` in each with ``MUJOCO_GL=egl``; each run's full output
-goes to ``logs/<version>.txt`` beside the venvs. The releases are the newest patch of every
-minor release that pip offers from the project's floor (``mujoco_physics.version.MINIMUM_VERSION``)
+Builds one venv per release under `.cache/mujoco_versions/<version>` (kept between runs;
+`--venvs` puts them elsewhere), installs this project with its `[test]` extra and that
+`mujoco` there, and runs `pytest` in each with `MUJOCO_GL=egl`; each run's full output
+goes to `logs/<version>.txt` beside the venvs. The releases are the newest patch of every
+minor release that pip offers from the project's floor (`mujoco_physics.version.MINIMUM_VERSION`)
 up, the floor version itself, and the newest release below the floor, where importing the
-project must fail with the ImportError that names both versions. ``--releases`` picks some:
-``floor``, ``newest``, ``below-floor``, a minor (``3.3``, its newest patch) or an exact
-version (``3.3.0``). With ``--strict`` the exit status is 1 when a release has a failing test
+project must fail with the ImportError that names both versions. `--releases` picks some:
+`floor`, `newest`, `below-floor`, a minor (`3.3`, its newest patch) or an exact
+version (`3.3.0`). With `--strict` the exit status is 1 when a release has a failing test
 or its install or test run breaks.
 """
 
@@ -116,9 +116,9 @@ def below_floor_release(versions: list[str], floor: str) -> Release | None:
 def pick(
     releases: list[Release], versions: list[str], wanted: list[str], floor: str
 ) -> list[Release]:
-    """The releases named in `wanted`: a minor (``3.3``), an exact version (``3.3.0``),
-    ``floor`` (exactly the project's floor version), ``newest`` (the newest release) or
-    ``below-floor`` (the newest release older than the floor)."""
+    """The releases named in `wanted`: a minor (`3.3`), an exact version (`3.3.0`),
+    `floor` (exactly the project's floor version), `newest` (the newest release) or
+    `below-floor` (the newest release older than the floor)."""
     by_minor = {release.minor: release for release in releases}
     aliases = {"floor": floor, "newest": releases[-1].version}
     below = below_floor_release(versions, floor)
@@ -193,8 +193,8 @@ def _summary_counts(output: str) -> dict[str, int] | None:
 
 
 def run_release(release: Release, venvs: Path, pytest_args: list[str]) -> Outcome:
-    """Installs (once) and tests one release in ``venvs/<version>``; its full log goes to
-    ``venvs/logs/<version>.txt``."""
+    """Installs (once) and tests one release in `venvs/<version>`; its full log goes to
+    `venvs/logs/<version>.txt`."""
     start = time.monotonic()
     venv = venvs / release.version
     log_path = venvs / "logs" / f"{release.version}.txt"

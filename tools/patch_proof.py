@@ -16,7 +16,7 @@ write followed by `mj_setConst`.
 
 Prints one line per pair: how it patches, or why it recompiles (the fields that differ).
 Exits 1 when the proof disagrees with the checked-in table `mjcf/patchable_attributes.py`,
-unless ``--write``, which rewrites the table.
+unless `--write`, which rewrites the table.
 """
 
 from __future__ import annotations

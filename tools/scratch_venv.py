@@ -1,6 +1,6 @@
 """Scratch virtual environments for the harnesses and benchmarks (not library code).
 
-``ensure_venv(path, requirements, project=True)`` creates ``path`` once with the given pip
+`ensure_venv(path, requirements, project=True)` creates `path` once with the given pip
 requirements (and this project installed editable), and reuses it while the requirements
 are unchanged.
 """
@@ -22,10 +22,10 @@ def _pip(python: Path, *args: str) -> None:
 
 
 def ensure_venv(path: Path, requirements: list[str], *, project: bool = True) -> Path:
-    """Returns the python of a venv at ``path`` holding ``requirements``.
+    """Returns the python of a venv at `path` holding `requirements`.
 
     The venv is rebuilt when the requirements differ from the ones it was built with. With
-    ``project`` the working tree is (re)installed editable on every call, without touching
+    `project` the working tree is (re)installed editable on every call, without touching
     its dependencies, so the venv always runs the current code.
     """
     python = path / "bin" / "python"
