@@ -13,6 +13,7 @@ import gymnasium
 import numpy as np
 import pytest
 from gym_scene import CounterEnv
+from ray_actors import wait_until_dead
 
 from composer.gym import RayVectorEnv
 
@@ -72,17 +73,6 @@ def _worker_node(cluster, node_id):
     return node
 
 
-def _wait_until_dead(ray, actor):
-    deadline = time.monotonic() + 30
-    while time.monotonic() < deadline:
-        try:
-            ray.get(actor.__ray_ready__.remote(), timeout=10)
-        except ray.exceptions.RayActorError:
-            return
-        time.sleep(0.02)
-    raise AssertionError(f"{actor} still alive after 30 s")
-
-
 def _wait_for_free_cpus(ray, cpus):
     deadline = time.monotonic() + 30
     while ray.available_resources().get("CPU", 0) < cpus and time.monotonic() < deadline:
@@ -129,7 +119,7 @@ def test_actors_spread_over_nodes_and_a_removed_node_s_actors_restart_on_the_oth
     finally:
         envs.close()
     for actor in actors:
-        _wait_until_dead(ray, actor)
+        wait_until_dead(ray, actor)
     assert _wait_for_free_cpus(ray, 2) == 2
 
 
@@ -153,7 +143,7 @@ def test_a_lost_actor_with_no_free_cpu_left_raises_timeout_error_and_closes(ray,
             envs.step(np.zeros((2, 1)))
     finally:
         envs.close()
-    _wait_until_dead(ray, actors[0])
+    wait_until_dead(ray, actors[0])
     assert _wait_for_free_cpus(ray, 1) == 1
 
 

@@ -14,6 +14,7 @@ import gymnasium
 import numpy as np
 import pytest
 from gym_scene import CounterEnv, slider_environment
+from ray_actors import wait_until_dead
 
 import manipulation  # noqa: F401  (registers the composer/<name>-v0 ids)
 from composer.gym import GymnasiumEnv, RayVectorEnv, SubEnvironmentError, ThreadedVectorEnv
@@ -57,18 +58,7 @@ def _counters(lengths, **kwargs):
 def _kill(ray, actor):
     """Kills `actor` and waits until it is dead (`ray.kill` only sends the request)."""
     ray.kill(actor)
-    _wait_until_dead(ray, actor)
-
-
-def _wait_until_dead(ray, actor):
-    deadline = time.monotonic() + 30
-    while time.monotonic() < deadline:
-        try:
-            ray.get(actor.__ray_ready__.remote(), timeout=10)
-        except ray.exceptions.RayActorError:
-            return
-        time.sleep(0.02)
-    raise AssertionError(f"{actor} still alive after 30 s")
+    wait_until_dead(ray, actor)
 
 
 def _slider():
@@ -270,7 +260,7 @@ def test_close_kills_every_actor_and_frees_their_cpus(ray, closing):
     assert envs.num_cpus_per_actor == 1.0
     envs.close()
     for actor in actors:
-        _wait_until_dead(ray, actor)
+        wait_until_dead(ray, actor)
     deadline = time.monotonic() + 30
     while ray.available_resources().get("CPU", 0) < 2 and time.monotonic() < deadline:
         time.sleep(0.1)
