@@ -5,12 +5,12 @@ device arrays."""
 import gymnasium
 import numpy as np
 import pytest
-import warp as wp
 
 from composer.batch import BatchTimeStep
 from manipulation import batch as manipulation_batch
 
 pytestmark = pytest.mark.warp
+wp = pytest.importorskip("warp", reason="needs MuJoCo Warp: pip install -e '.[warp]'")
 
 NUM_ENVS = 3
 STEPS = 4
