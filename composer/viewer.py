@@ -221,7 +221,7 @@ class PassiveWindow:
         self._window: _Window | None = None
 
     def handle_for(self, physics) -> mujoco.viewer.Handle:
-        """The viewer handle showing `physics` (whose ``data.ptr`` is a ``mujoco.MjData``)."""
+        """The viewer handle showing `physics` (whose `data.ptr` is a `mujoco.MjData`)."""
         if self._window is not None and physics.data.ptr is not self._window.data:
             self.close()
         if self._window is None:
