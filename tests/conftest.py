@@ -13,6 +13,25 @@ os.environ.setdefault("MUJOCO_GL", "egl")
 SCREEN = (1024, 768)
 
 
+def pytest_collection_modifyitems(config, items):
+    # The patch table is proven on one MuJoCo release; on another nothing patches (a reset
+    # recompiles), so what the table promises is not there to check.
+    from mjcf import model_patch, patchable_attributes
+
+    if model_patch.patch_supported():
+        return
+    import mujoco
+
+    skip = pytest.mark.skip(
+        reason=f"mjcf/patchable_attributes.py is proven on mujoco "
+        f"{patchable_attributes.MUJOCO_VERSION}; mujoco {mujoco.__version__} recompiles "
+        "instead until `python -m tools.patch_proof --write` runs on it"
+    )
+    for item in items:
+        if "patch_table" in item.keywords:
+            item.add_marker(skip)
+
+
 @pytest.fixture(scope="session")
 def display():
     """Starts Xvfb on a display number it picks itself; yields ':N'. Skips without Xvfb."""

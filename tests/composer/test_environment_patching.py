@@ -1,6 +1,7 @@
 """composer.Environment resets that patch the compiled model instead of recompiling it."""
 
 import numpy as np
+import pytest
 from composer_scene import ReachTask
 
 import composer
@@ -68,6 +69,7 @@ def test_twenty_seeded_episodes_are_bit_identical_with_patching_on_and_off():
     assert patched_env.task.after_compile_calls == compiled_env.task.after_compile_calls == 21
 
 
+@pytest.mark.patch_table
 def test_a_reset_that_changes_only_patchable_values_does_not_compile(monkeypatch):
     env = composer.Environment(VariedTask(), random_state=3)
     compiles = _count_compiles(monkeypatch)

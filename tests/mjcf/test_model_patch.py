@@ -66,6 +66,7 @@ def _patch(root, physics, count) -> bool:
     return physics.apply_attribute_changes(root.attribute_changes_since(count))
 
 
+@pytest.mark.patch_table
 def test_colour_friction_frictionloss_and_solref_patch_to_a_recompile(scene):
     root, physics, count = scene
     root.find("geom", "upper").rgba = [0.2, 0.4, 0.6, 0.8]
@@ -77,6 +78,7 @@ def test_colour_friction_frictionloss_and_solref_patch_to_a_recompile(scene):
     np.testing.assert_array_equal(physics.named.model.geom_solref["lower"], [0.04, 0.8])
 
 
+@pytest.mark.patch_table
 def test_a_default_class_change_reaches_the_elements_that_inherit_it(scene):
     root, physics, count = scene
     root.default.joint.frictionloss = 0.9
@@ -88,6 +90,7 @@ def test_a_default_class_change_reaches_the_elements_that_inherit_it(scene):
     )
 
 
+@pytest.mark.patch_table
 def test_unsetting_a_value_patches_the_inherited_one(scene):
     root, physics, count = scene
     del root.find("joint", "wrist").frictionloss
@@ -156,6 +159,7 @@ def test_attachment_frames_are_not_patched(scene):
     assert not _patch(root, physics, count)
 
 
+@pytest.mark.patch_table
 def test_an_attached_models_values_patch_through_the_parent(scene):
     root, _, _ = scene
     child = mjcf.RootElement(model="child")
@@ -176,6 +180,7 @@ def test_nothing_patches_on_a_mujoco_the_table_was_not_proven_on(scene, monkeypa
     assert not _patch(root, physics, count)
 
 
+@pytest.mark.patch_table
 def test_set_const_pairs_bring_derived_constants_up_to_date():
     # A camera's position feeds cam_pos0 and cam_poscom0, which mj_setConst computes.
     root = mjcf.from_xml_string(

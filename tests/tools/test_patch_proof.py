@@ -1,8 +1,11 @@
 """tools.patch_proof proves value-only attributes and refuses those the compiler derives."""
 
+import pytest
+
 from tools import patch_proof
 
 
+@pytest.mark.patch_table
 def test_colour_is_proven_and_geom_size_and_body_pos_are_refused_with_their_fields():
     proven, refused = patch_proof._verdicts(
         patch_proof.prove({("geom", "rgba"), ("geom", "size"), ("body", "pos")})
