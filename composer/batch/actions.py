@@ -10,16 +10,9 @@ from typing import Any
 import numpy as np
 
 from composer.batch import _warp, kernels
-from composer.batch.outputs import DeviceOutputs
+from composer.batch.outputs import DeviceOutputs, array_library
 
-__all__ = ["check_action", "is_device_array"]
-
-_DEVICE_LIBRARIES = ("warp", "torch", "jax", "jaxlib")
-
-
-def is_device_array(action) -> bool:
-    """Whether `action` is a Warp, torch or JAX array (checked without importing them)."""
-    return type(action).__module__.split(".", 1)[0] in _DEVICE_LIBRARIES
+__all__ = ["check_action"]
 
 
 def check_action(action, expected: tuple[int, ...], outputs: DeviceOutputs) -> Any:
@@ -33,7 +26,7 @@ def check_action(action, expected: tuple[int, ...], outputs: DeviceOutputs) -> A
         `expected`, a device array on another device, or NaN or infinite entries (the
         message lists the worlds that have them).
     """
-    if not is_device_array(action):
+    if not array_library(action):
         return _check_host_action(action, expected)
     wp = _warp.load()[0]
     try:

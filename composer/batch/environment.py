@@ -60,7 +60,7 @@ class BatchTimeStep(NamedTuple):
 
 def _step_types(step_type):
     # A Warp array has no elementwise comparison; its values come to the host to compare.
-    return step_type.numpy() if type(step_type).__module__.startswith("warp") else step_type
+    return step_type.numpy() if outputs.array_library(step_type) == "warp" else step_type
 
 
 class EpisodeEnds(NamedTuple):
@@ -195,6 +195,7 @@ class BatchEnvironment:
         self._on_device = array_type != "numpy"
         self._controls_on_device = type(self._batch_task).before_step is BatchTask.before_step
         self._action_spec = cpu_task.action_spec(host)
+        self._action_shape = (self.num_envs, *self._action_spec.shape)
         self._observables = BatchObservables(
             cpu_task.observables, self._physics, strip_singleton_obs_buffer_dim
         )
@@ -284,8 +285,7 @@ class BatchEnvironment:
 
     def _apply_action(self, action) -> None:
         """Checks `action` and sets the controls of every world (see `actions`)."""
-        expected = (self.num_envs,) + tuple(self._action_spec.shape)
-        checked = actions.check_action(action, expected, self._outputs)
+        checked = actions.check_action(action, self._action_shape, self._outputs)
         physics = self._physics
         if not isinstance(checked, np.ndarray):
             if self._controls_on_device:
@@ -298,7 +298,7 @@ class BatchEnvironment:
                     device=physics.device,
                 )
                 return
-            checked = checked.numpy().astype(np.float64).reshape(expected)
+            checked = checked.numpy().astype(np.float64).reshape(self._action_shape)
         self._batch_task.before_step(physics, checked)
 
     def step(self, action) -> BatchTimeStep:
@@ -319,7 +319,7 @@ class BatchEnvironment:
             stepped.
         """
         if self._reset_next.all():
-            actions.check_action(action, (self.num_envs, *self._action_spec.shape), self._outputs)
+            actions.check_action(action, self._action_shape, self._outputs)
             return self.reset()
         restarting = np.flatnonzero(self._reset_next)
         physics, task = self._physics, self._batch_task

@@ -27,12 +27,18 @@ from typing import Any
 
 import numpy as np
 
-__all__ = ["ARRAY_TYPES", "DeviceOutputs"]
+__all__ = ["ARRAY_TYPES", "DeviceOutputs", "array_library"]
 
 #: The values of `BatchEnvironment(array_type=...)`.
 ARRAY_TYPES = ("numpy", "warp", "torch", "jax")
 
-_IMPORTERS = {"torch": "from_torch", "jax": "from_jax"}
+# The top-level module of an array's type -> the library `array_library` names.
+_LIBRARIES = {"warp": "warp", "torch": "torch", "jax": "jax", "jaxlib": "jax"}
+
+
+def array_library(values) -> str:
+    """'warp', 'torch' or 'jax' for an array of that library (none is imported), else ''."""
+    return _LIBRARIES.get(type(values).__module__.split(".", 1)[0], "")
 
 
 def check_array_type(array_type: str) -> str:
@@ -87,23 +93,16 @@ class DeviceOutputs:
         """`array` (a Warp array on the device) as `array_type`, sharing its memory."""
         return array if self._convert is None else self._convert(array)
 
-    def to_device(self, values, dtype=np.float32):
-        """Caller input (an action) as a Warp array on the device.
+    def to_device(self, values):
+        """A Warp, torch or JAX array (an action) as a Warp array sharing its memory.
 
-        Warp arrays on the device are used as they are (converted to `dtype` on the device
-        if needed), torch and JAX arrays through DLPack, anything else through NumPy (one
-        host-to-device copy on CUDA).
+        Warp arrays are used as they are; torch and JAX arrays go through DLPack
+        (`warp.from_torch`, `warp.from_jax`). The array stays on its own device: the
+        caller checks that it is this batch's.
         """
-        wp = self._wp
-        if isinstance(values, wp.array):
-            return values
-        importer = _IMPORTERS.get(_library_of(values))
-        if importer is not None:
-            return getattr(wp, importer)(values)
-        return self.upload(np.asarray(values, dtype=dtype))
-
-
-def _library_of(values) -> str:
-    """'torch', 'jax' or '' from the top-level module of `values`' type."""
-    module = type(values).__module__.split(".", 1)[0]
-    return {"torch": "torch", "jax": "jax", "jaxlib": "jax"}.get(module, "")
+        library = array_library(values)
+        if library == "torch":
+            return self._wp.from_torch(values)
+        if library == "jax":
+            return self._wp.from_jax(values)
+        return values
