@@ -221,6 +221,7 @@ class BatchedVectorEnv(VectorEnv):
         self._terminations = np.zeros(num_envs, dtype=np.bool_)
         self._truncations = np.zeros(num_envs, dtype=np.bool_)
         self._episode_over = np.zeros(num_envs, dtype=np.bool_)
+        self._box_actions = isinstance(self.action_space, gymnasium.spaces.Box)
 
     def _map(
         self,
@@ -281,6 +282,7 @@ class BatchedVectorEnv(VectorEnv):
           observations, rewards (float64), terminations and truncations (bool), infos.
 
         Raises:
+          ValueError: if `actions` does not hold one action per sub-environment.
           RuntimeError: in DISABLED mode, if a sub-environment whose episode is over was
             not reset.
           SubEnvironmentError: if a sub-environment raised.
@@ -294,11 +296,19 @@ class BatchedVectorEnv(VectorEnv):
                 "episodes and autoreset_mode is DISABLED: reset them with "
                 "reset(options={'reset_mask': mask}) before stepping"
             )
+        # A Box's batch is an array whose rows are the actions: no need for `iterate`.
+        if self._box_actions and isinstance(actions, np.ndarray) and actions.ndim:
+            rows = actions
+        else:
+            rows = list(iterate(self.action_space, actions))
+        if len(rows) != self.num_envs:
+            raise ValueError(
+                f"actions: expected one per sub-environment ({self.num_envs}), got "
+                f"{len(rows)}"
+            )
+        ended = episode_over.tolist()
         outcomes = self._step_sub_envs(
-            {
-                i: (action, mode, bool(episode_over[i]))
-                for i, action in enumerate(iterate(self.action_space, actions))
-            }
+            {i: (action, mode, ended[i]) for i, action in enumerate(rows)}
         )
         return (
             self._observations_out(),
@@ -396,6 +406,12 @@ class BatchedVectorEnv(VectorEnv):
         return self._copy_observations() if self.copy else self._observations
 
     def _batched_infos(self, outcomes: dict[int, SubEnvOutcome]) -> dict[str, Any]:
+        """Gymnasium's batching of the outcomes' infos (`VectorEnv._add_info`).
+
+        A key already batched as an array by an earlier sub-environment is filled in
+        here, as `_add_info` would fill it, without its call: the adapter's 'discount'
+        takes this way on every step of every sub-environment but the first.
+        """
         infos: dict[str, Any] = {}
         for i, outcome in outcomes.items():
             if outcome.final_info is not None:
@@ -404,5 +420,11 @@ class BatchedVectorEnv(VectorEnv):
                     {"final_obs": outcome.final_observation, "final_info": outcome.final_info},
                     i,
                 )
-            infos = self._add_info(infos, outcome.info, i)
+            for key, value in outcome.info.items():
+                column = infos.get(key)
+                if type(column) is np.ndarray and key != "final_obs" and not isinstance(value, dict):
+                    column[i] = value
+                    infos["_" + key][i] = True
+                else:
+                    infos = self._add_info(infos, {key: value}, i)
         return infos

@@ -165,6 +165,8 @@ class PinnedThreadPool:
             `__cause__`), once all have finished.
         """
         self._check_caller()
+        if not self._workers:
+            return self._run_alone(task, indices)
         if self._busy:
             self._finish_interrupted()
         call, wanted, k = self._call, self._wanted, self.num_threads
@@ -174,7 +176,7 @@ class PinnedThreadPool:
         for i in indices:
             if not 0 <= i < self.size:
                 self._finish_interrupted()
-                raise IndexError(f"indices: expected slots in range(0, {self.size}), got {i}")
+                self._check_index(i)
             selected[i] = True
             wanted[i % k] = True
         call.task = task
@@ -193,10 +195,29 @@ class PinnedThreadPool:
         self._clear(indices)
         return out
 
+    def _run_alone(self, task: Callable[[int], Any], indices: Collection[int]) -> dict[int, Any]:
+        """`run` for a pool of one thread: the owner runs every task, nothing is shared."""
+        for i in indices:
+            self._check_index(i)
+        results, errors = {}, {}
+        for i in indices:
+            try:
+                results[i] = task(i)
+            except Exception as error:  # KeyboardInterrupt and the like propagate
+                errors[i] = error
+        if errors:
+            lowest = min(errors)
+            raise SubEnvironmentError(lowest, errors[lowest]) from errors[lowest]
+        return results
+
+    def _check_index(self, index: int) -> None:
+        if not 0 <= index < self.size:
+            raise IndexError(f"indices: expected slots in range(0, {self.size}), got {index}")
+
     def _check_caller(self) -> None:
         if self._closed:
             raise RuntimeError(f"this {type(self).__name__} is closed")
-        if threading.current_thread() is not self.owner:
+        if threading.get_ident() != self.owner.ident:
             raise RuntimeError(
                 f"run() called from thread {threading.current_thread().name!r}; the pool "
                 f"runs slots on its owner thread {self.owner.name!r} (the one that made "

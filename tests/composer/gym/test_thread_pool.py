@@ -56,15 +56,17 @@ def test_default_is_one_thread_per_core_at_most_one_per_slot(monkeypatch):
         pool.close()
 
 
-def test_results_come_back_by_slot_and_only_for_the_slots_asked():
-    pool = PinnedThreadPool(6, 2)
+@pytest.mark.parametrize("num_threads", [1, 2])
+def test_results_come_back_by_slot_and_only_for_the_slots_asked(num_threads):
+    pool = PinnedThreadPool(6, num_threads)
     assert pool.run(lambda i: i * 10, [5, 0, 3]) == {5: 50, 0: 0, 3: 30}
     assert pool.run(lambda i: -i, []) == {}
     pool.close()
 
 
-def test_an_exception_names_the_lowest_failing_slot_after_every_slot_ran():
-    pool = PinnedThreadPool(4, 2)
+@pytest.mark.parametrize("num_threads", [1, 2])
+def test_an_exception_names_the_lowest_failing_slot_after_every_slot_ran(num_threads):
+    pool = PinnedThreadPool(4, num_threads)
     ran = []
 
     def task(i):
@@ -108,10 +110,13 @@ def test_a_call_from_another_thread_is_refused_naming_the_owner():
     pool.close()
 
 
-def test_an_index_outside_the_slots_is_rejected_and_the_pool_goes_on():
-    pool = PinnedThreadPool(3, 2)
+@pytest.mark.parametrize("num_threads", [1, 2])
+def test_an_index_outside_the_slots_is_rejected_and_the_pool_goes_on(num_threads):
+    pool = PinnedThreadPool(3, num_threads)
+    ran = []
     with pytest.raises(IndexError, match=r"expected slots in range\(0, 3\), got 3"):
-        pool.run(lambda i: i, [0, 3])
+        pool.run(ran.append, [0, 3])
+    assert ran == []  # nothing runs when an index is bad
     assert pool.run(lambda i: i, range(3)) == {0: 0, 1: 1, 2: 2}
     pool.close()
 

@@ -159,6 +159,59 @@ def test_every_autoreset_mode_matches_gymnasiums_sync_vector_env(mode):
     ours.close()
 
 
+class _InfoEnv(gymnasium.Env):
+    """Returns infos of every kind Gymnasium batches: numbers, arrays, objects, nested
+    dicts, and keys that only some sub-environments have."""
+
+    observation_space = gymnasium.spaces.Box(-1.0, 1.0, (1,))
+    action_space = gymnasium.spaces.Box(-1.0, 1.0, (1,))
+
+    def __init__(self, index):
+        self.index = index
+
+    def reset(self, *, seed=None, options=None):
+        return np.zeros(1, dtype=np.float32), {}
+
+    def step(self, action):
+        info = {"discount": 0.5 * self.index, "pose": np.full(3, self.index)}
+        if self.index % 2:
+            info["odd"] = {"label": f"env {self.index}", "count": self.index}
+        if self.index >= 2:
+            info["late"] = self.index
+        return np.zeros(1, dtype=np.float32), 0.0, False, False, info
+
+
+def _assert_same_infos(got, expected):
+    assert got.keys() == expected.keys()
+    for key, value in expected.items():
+        if isinstance(value, dict):
+            _assert_same_infos(got[key], value)
+        else:
+            assert got[key].dtype == value.dtype, key
+            np.testing.assert_array_equal(got[key], value)
+
+
+def test_infos_are_batched_as_gymnasiums_sync_vector_env_batches_them():
+    fns = [lambda i=i: _InfoEnv(i) for i in range(4)]
+    ours, reference = ThreadedVectorEnv(fns, 2), SyncVectorEnv(fns)
+    for envs in (ours, reference):
+        envs.reset(seed=0)
+    for _ in range(2):
+        _assert_same_infos(ours.step(np.zeros((4, 1)))[4], reference.step(np.zeros((4, 1)))[4])
+    ours.close()
+
+
+@pytest.mark.parametrize("rows", [2, 4])
+def test_actions_for_more_or_fewer_sub_envs_are_rejected_and_nothing_steps(rows):
+    envs = ThreadedVectorEnv(_counters([5, 5, 5]), 2)
+    envs.reset(seed=0)
+    with pytest.raises(ValueError, match=rf"actions: expected one per sub-environment \(3\), got {rows}"):
+        envs.step(np.zeros((rows, 1)))
+    observations = envs.step(np.zeros((3, 1)))[0]
+    assert _obs(observations) == [1, 101, 201]  # the first step each one took
+    envs.close()
+
+
 def test_each_sub_env_is_seeded_with_seed_plus_its_index():
     envs = ThreadedVectorEnv(
         [lambda: GymnasiumEnv(manipulation.load("reach_site_features"))] * 3, num_threads=2
