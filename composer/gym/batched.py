@@ -303,8 +303,7 @@ class BatchedVectorEnv(VectorEnv):
             rows = list(iterate(self.action_space, actions))
         if len(rows) != self.num_envs:
             raise ValueError(
-                f"actions: expected one per sub-environment ({self.num_envs}), got "
-                f"{len(rows)}"
+                f"actions: expected one per sub-environment ({self.num_envs}), got {len(rows)}"
             )
         ended = episode_over.tolist()
         outcomes = self._step_sub_envs(
@@ -422,7 +421,8 @@ class BatchedVectorEnv(VectorEnv):
                 )
             for key, value in outcome.info.items():
                 column = infos.get(key)
-                if type(column) is np.ndarray and key != "final_obs" and not isinstance(value, dict):
+                batched = type(column) is np.ndarray and key != "final_obs"
+                if batched and not isinstance(value, dict):
                     column[i] = value
                     infos["_" + key][i] = True
                 else:

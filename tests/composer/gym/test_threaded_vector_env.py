@@ -205,7 +205,8 @@ def test_infos_are_batched_as_gymnasiums_sync_vector_env_batches_them():
 def test_actions_for_more_or_fewer_sub_envs_are_rejected_and_nothing_steps(rows):
     envs = ThreadedVectorEnv(_counters([5, 5, 5]), 2)
     envs.reset(seed=0)
-    with pytest.raises(ValueError, match=rf"actions: expected one per sub-environment \(3\), got {rows}"):
+    expected = rf"actions: expected one per sub-environment \(3\), got {rows}"
+    with pytest.raises(ValueError, match=expected):
         envs.step(np.zeros((rows, 1)))
     observations = envs.step(np.zeros((3, 1)))[0]
     assert _obs(observations) == [1, 101, 201]  # the first step each one took
