@@ -18,6 +18,7 @@ from composer.utils import argument_checks
 from composer.weak_physics import WeakPhysics
 from mjcf.physics import compile_mjcf_model
 from mujoco_physics.model_snapshot import ModelSnapshot, snapshots_supported
+from mujoco_physics.reset_state import ResetState
 
 __all__ = [
     "HOOK_NAMES",
@@ -177,6 +178,7 @@ class Environment(dm_env.Environment):
         self._data = None
         self._ctrl = None
         self._snapshot = None
+        self._reset_state = ResetState()
         self._compiled_count = None
         self._last_model_update = None
         self._check_action = None
@@ -330,6 +332,12 @@ class Environment(dm_env.Environment):
         `_collected`) are all the same as last time: as in dm_control, which builds a new
         updater at every recompile, an observable added between episodes is observed from
         the next reset.
+
+        The data the episode's reset starts from (`mj_resetData` and a forward) is copied
+        from the last reset (`ResetState`) while the model is the same in every field
+        forward reads: outcome 1, or 2 when only colours and materials changed
+        (`changes_are_forward_neutral`), and no `after_compile` hook could have written
+        to the model; anything else resets afresh.
         """
         root = self._task.root_entity.mjcf_model
         self._last_model_update = self._bring_model_up_to_date(root)
@@ -338,6 +346,9 @@ class Environment(dm_env.Environment):
             self._hooks.refresh_entity_hooks()
             self._check_action = action_validator(self._task.action_spec(self._physics_proxy))
         self._run_after_compile_hooks()
+        if self._hooks.has_after_compile_hooks:
+            # They may write to the model, differently each time.
+            self._reset_state.invalidate()
         observables = self._task.observables
         collected = _collected(observables)
         if (
@@ -360,7 +371,10 @@ class Environment(dm_env.Environment):
                 snapshot.restore()
                 if self._physics.apply_attribute_changes(changes):
                     snapshot.save()
+                    if not self._physics.changes_are_forward_neutral(changes):
+                        self._reset_state.invalidate()
                     return _ModelUpdate.PATCHED
+        self._reset_state.invalidate()
         model = compile_mjcf_model(root)
         if snapshot is not None and snapshot.load(model):
             return _ModelUpdate.LOADED
@@ -444,7 +458,10 @@ class Environment(dm_env.Environment):
             self._hooks.initialize_episode_mjcf(self._random_state)
             self._update_model()
             self._episode_mjcf_prepared = True
-        with self._physics.reset_context():
+        else:
+            # The model keeps what the last episode wrote into it.
+            self._reset_state.invalidate()
+        with self._physics.reset_context(reset_state=self._reset_state):
             self._hooks.initialize_episode(self._physics_proxy, self._random_state)
         self._observation_updater.reset(self._physics_proxy, self._random_state)
         self._reset_next_step = False

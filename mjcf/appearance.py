@@ -18,9 +18,12 @@ here, that perturbing it leaves every MjData array after `mj_forward` bit-identi
 that a rangefinder does see a geom's colour.
 """
 
+from collections.abc import Iterable
+
 import mujoco
 
-from mujoco_physics.field_layout import MODEL_EXTENTS
+from mjcf.binding import element_namespace
+from mujoco_physics.field_layout import FAMILIES, MODEL_EXTENTS
 
 _APPEARANCE_PROPERTIES = frozenset(
     (
@@ -61,3 +64,15 @@ def forward_neutral_fields(model: mujoco.MjModel) -> frozenset[str]:
     if model.nplugin or not _SENSORS_READING_APPEARANCE.isdisjoint(model.sensor_type.tolist()):
         return frozenset()
     return APPEARANCE_FIELDS
+
+
+def changes_are_forward_neutral(changes: Iterable, neutral_fields: frozenset[str]) -> bool:
+    """Whether every (element, XML attribute name) change compiles only into a field of
+    `neutral_fields`; False for an attribute that is not one MjModel field of its element."""
+    for element, xml_name in changes:
+        spec = element.spec.attributes.get(xml_name)
+        family = FAMILIES.get(element_namespace(element) or "")
+        ref = family.fields.get(spec.python_name) if family and spec else None
+        if ref is None or ref.name not in neutral_fields:
+            return False
+    return True

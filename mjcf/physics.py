@@ -7,7 +7,7 @@ import mujoco
 
 from mjcf import binding as binding_module
 from mjcf import model_patch
-from mjcf.appearance import forward_neutral_fields
+from mjcf.appearance import changes_are_forward_neutral, forward_neutral_fields
 from mujoco_physics import engine
 from mujoco_physics.engine import PhysicsError
 
@@ -145,6 +145,12 @@ class Physics(engine.Physics):
           a change is not one that `mjcf.model_patch` can write (then recompile).
         """
         return model_patch.patch_model(self, self._layout, changes)
+
+    def changes_are_forward_neutral(self, changes) -> bool:
+        """Whether every (element, XML attribute name) change compiles only into fields that
+        `mj_forward` does not read in this model (`mjcf.appearance.forward_neutral_fields`):
+        a colour's, a material's."""
+        return changes_are_forward_neutral(changes, self._sim.forward_neutral)
 
     def __getstate__(self) -> dict:
         """What pickling (and `copy.deepcopy`) keeps: the model and data, with the MJCF

@@ -9,6 +9,7 @@ constructors from an `mjcf.RootElement`.
 import contextlib
 import copy as copy_module
 from collections.abc import Iterator
+from typing import TYPE_CHECKING
 
 import mujoco
 import numpy as np
@@ -26,6 +27,9 @@ from mujoco_physics.rendering import (
     Renderers,
 )
 from mujoco_physics.wrapper.core import MjData, MjModel, enable_timer, flags_set
+
+if TYPE_CHECKING:
+    from mujoco_physics.reset_state import ResetState
 
 _WARNING_NAMES = tuple(name for name in mujoco.mjtWarning.__members__ if name != "mjNWARNING")
 _RK4 = int(mujoco.mjtIntegrator.mjINT_RK4)
@@ -306,18 +310,32 @@ class Physics:
             self._sim.forward()
 
     @contextlib.contextmanager
-    def reset_context(self) -> Iterator["Physics"]:
+    def reset_context(self, *, reset_state: "ResetState | None" = None) -> Iterator["Physics"]:
         """Resets, yields this Physics for setting the initial state, then runs forward.
 
         A PhysicsError from the reset itself is ignored (the state is about to be set);
         errors raised inside the block propagate and skip the final forward.
+
+        Args:
+          reset_state: a `ResetState` that resets in place of `reset()`, copying the data
+            of its last reset while that is exact (see `mujoco_physics.reset_state`).
         """
         try:
-            self.reset()
+            if reset_state is None:
+                self.reset()
+            else:
+                reset_state.reset(self)
         except PhysicsError:
             pass
         yield self
         self.after_reset()
+
+    def copy_data_from(self, data: mujoco.MjData) -> None:
+        """Copies `data`, an MjData of this Physics' model, into this Physics' data in place
+        (`mj_copyData`); its derived quantities are taken as up to date."""
+        sim = self._sim
+        mujoco.mj_copyData(sim.data, sim.model, data)
+        sim.dirty = False
 
     @contextlib.contextmanager
     def check_invalid_state(self) -> Iterator[None]:

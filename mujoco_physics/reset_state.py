@@ -1,0 +1,69 @@
+"""`ResetState`: the MjData that `Physics.reset()` leaves, kept to be copied back.
+
+`Physics.reset()` resets the data (`mj_resetData`) and runs forward with actuation
+disabled. What that leaves in MjData is a function of the model alone, unless code outside
+the model takes part: a plugin (its state is reset by its own code) or a global callback
+(`mujoco.set_mjcb_passive`, ...). So while the model is unchanged in every field
+`mj_forward` reads, copying the data the last reset left (`mj_copyData`, a few µs) gives
+the same bytes as resetting again (tens to hundreds of µs: the forward).
+
+Whether the model is unchanged is for the owner to say: it calls `invalidate()` whenever
+the model may have changed in a field `mj_forward` reads since the last `reset`.
+`composer.Environment` does (see `_update_model`): its resets restore the model's
+parameters from a `ModelSnapshot`, so the model each reset starts from is known.
+"""
+
+import mujoco
+
+from mujoco_physics.engine import Physics
+
+__all__ = ["ResetState"]
+
+# MuJoCo's global callbacks, found in the installed bindings by their getters' names.
+_CALLBACK_GETTERS = tuple(
+    getattr(mujoco, name) for name in sorted(dir(mujoco)) if name.startswith("get_mjcb_")
+)
+
+
+def _outside_code_takes_part(model: mujoco.MjModel) -> bool:
+    return bool(model.nplugin) or any(get() is not None for get in _CALLBACK_GETTERS)
+
+
+class ResetState:
+    """Resets a Physics as `Physics.reset()` does, copying the data of the last reset
+    instead of recomputing it while that is exact.
+
+    The kept data belongs to one MjModel object: a reset of a Physics with another model
+    (a recompile) resets afresh. A reset whose forward warned keeps nothing, so the next
+    one raises (or logs) the warning again.
+    """
+
+    __slots__ = ("_model", "_data")
+
+    def __init__(self):
+        self._model: mujoco.MjModel | None = None
+        self._data: mujoco.MjData | None = None
+
+    def invalidate(self) -> None:
+        """Forgets the kept data: the model may have changed in a field forward reads."""
+        self._model = None
+
+    def reset(self, physics: Physics) -> None:
+        """Leaves `physics`'s data as `physics.reset()` would.
+
+        Raises:
+          PhysicsError: as `physics.reset()` does, when it resets afresh.
+        """
+        model = physics.model.ptr
+        if self._model is model and not _outside_code_takes_part(model):
+            physics.copy_data_from(self._data)
+            return
+        self._model = None
+        physics.reset()
+        # A forward that warned is not kept: resetting again warns (or raises) again.
+        if _outside_code_takes_part(model) or physics.data.ptr.warning.number.any():
+            return
+        if self._data is None or self._data.model is not model:
+            self._data = mujoco.MjData(model)
+        mujoco.mj_copyData(self._data, model, physics.data.ptr)
+        self._model = model

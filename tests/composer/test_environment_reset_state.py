@@ -1,0 +1,157 @@
+"""composer.Environment resets that copy the data of the last reset instead of recomputing it."""
+
+import mujoco
+import numpy as np
+import pytest
+from composer_scene import ReachTask
+
+import composer
+from mujoco_physics import engine
+
+# What the first forward of a reset computes, read by the task before it sets the state.
+_READ_AT_RESET = ("qacc", "efc_force", "xpos", "sensordata")
+
+
+def _reset_values(data: mujoco.MjData) -> dict[str, bytes]:
+    values = {name: getattr(data, name).tobytes() for name in _READ_AT_RESET}
+    values["contact.pos"] = data.contact.pos.tobytes()
+    return values
+
+
+def _fresh_reset(model: mujoco.MjModel) -> mujoco.MjData:
+    """What a reset computes for `model`: `mj_resetData`, then forward without actuation."""
+    data = mujoco.MjData(model)
+    mujoco.mj_resetData(model, data)
+    flags = model.opt.disableflags
+    model.opt.disableflags = flags | mujoco.mjtDisableBit.mjDSBL_ACTUATION
+    mujoco.mj_forward(model, data)
+    model.opt.disableflags = flags
+    return data
+
+
+class RecordingTask(ReachTask):
+    """Varies the box's colour before every episode, and with `vary_contacts` also the
+    softness of the floor's contacts (`solref`), which the box's contact forces at the
+    reset state depend on. Records what the reset left in the data, before setting it."""
+
+    def __init__(self, vary_contacts: bool):
+        super().__init__()
+        self.vary_contacts = vary_contacts
+        self.records = []
+        self.fresh_records = []  # what mj_resetData and a forward give, on new data
+
+    def initialize_episode_mjcf(self, random_state):
+        self.box.geom.rgba = [*random_state.uniform(size=3), 1]
+        if self.vary_contacts:
+            ground = self.arena.mjcf_model.find("geom", "ground")
+            ground.solref = [random_state.uniform(0.02, 0.2), 1.0]
+
+    def initialize_episode(self, physics, random_state):
+        data = physics.data.ptr
+        self.records.append(_reset_values(data))
+        self.fresh_records.append(_reset_values(_fresh_reset(physics.model.ptr)))
+        super().initialize_episode(physics, random_state)
+
+
+def _play(env, episodes: int = 6, steps: int = 5) -> list:
+    """The observations and rewards of `episodes` seeded episodes."""
+    actions = np.random.RandomState(1).uniform(-1, 1, size=(steps, 2))
+    values = []
+    for _ in range(episodes):
+        values.append(env.reset().observation)
+        for action in actions:
+            timestep = env.step(action)
+            values.append((timestep.reward, timestep.observation))
+    return values
+
+
+def _count_physics_resets(monkeypatch) -> list:
+    calls = []
+    original = engine.Physics.reset
+
+    def counting(self, *args, **kwargs):
+        calls.append(self)
+        return original(self, *args, **kwargs)
+
+    monkeypatch.setattr(engine.Physics, "reset", counting)
+    return calls
+
+
+@pytest.mark.patch_table
+@pytest.mark.parametrize("vary_contacts", [False, True])
+def test_resets_read_and_play_as_resets_that_recompile(vary_contacts):
+    reused = composer.Environment(RecordingTask(vary_contacts), random_state=5)
+    compiled = composer.Environment(
+        RecordingTask(vary_contacts), random_state=5, patch_compiled_model=False
+    )
+    reused_values, compiled_values = _play(reused), _play(compiled)
+    assert reused.task.records == reused.task.fresh_records == compiled.task.records
+    # The contact softness reaches what the reset computed: the records tell episodes apart.
+    assert (len({r["qacc"] for r in reused.task.records}) > 1) == vary_contacts
+    for mine, theirs in zip(reused_values, compiled_values):
+        if isinstance(mine, tuple):
+            assert mine[0] == theirs[0]
+            mine, theirs = mine[1], theirs[1]
+        for name in mine:
+            assert mine[name].tobytes() == theirs[name].tobytes(), name
+
+
+@pytest.mark.patch_table
+def test_when_only_colours_change_resets_copy_the_data_instead_of_a_forward(monkeypatch):
+    env = composer.Environment(RecordingTask(vary_contacts=False), random_state=5)
+    env.reset()
+    resets = _count_physics_resets(monkeypatch)
+    for _ in range(4):
+        env.reset()
+    assert resets == []
+
+
+@pytest.mark.patch_table
+def test_a_change_that_forward_reads_resets_afresh(monkeypatch):
+    env = composer.Environment(RecordingTask(vary_contacts=True), random_state=5)
+    env.reset()
+    resets = _count_physics_resets(monkeypatch)
+    for _ in range(4):
+        env.reset()
+    assert len(resets) == 4
+
+
+class SoftensAfterCompile(RecordingTask):
+    """Softens the floor's contacts through `physics.bind` after every compile."""
+
+    def after_compile(self, physics, random_state):
+        ground = self.arena.mjcf_model.find("geom", "ground")
+        physics.bind(ground).solref = [random_state.uniform(0.02, 0.2), 1.0]
+
+
+def test_an_after_compile_hook_makes_every_reset_start_afresh(monkeypatch):
+    env = composer.Environment(SoftensAfterCompile(vary_contacts=False), random_state=5)
+    compiled = composer.Environment(
+        SoftensAfterCompile(vary_contacts=False), random_state=5, patch_compiled_model=False
+    )
+    _play(compiled)
+    resets = _count_physics_resets(monkeypatch)
+    _play(env)
+    # Per episode: the reset context the hooks run in (as in dm_control), and the episode's.
+    assert len(resets) == 2 * 6
+    assert env.task.records == env.task.fresh_records == compiled.task.records
+
+
+class SoftensEveryEpisode(RecordingTask):
+    """Softens the floor's contacts through `physics.bind` at the start of every episode."""
+
+    def initialize_episode(self, physics, random_state):
+        super().initialize_episode(physics, random_state)
+        ground = self.arena.mjcf_model.find("geom", "ground")
+        physics.bind(ground).solref = [random_state.uniform(0.02, 0.2), 1.0]
+
+
+def test_without_recompiling_every_episode_resets_see_the_last_episodes_writes():
+    env = composer.Environment(
+        SoftensEveryEpisode(vary_contacts=False),
+        random_state=5,
+        recompile_mjcf_every_episode=False,
+    )
+    _play(env)
+    assert env.task.records == env.task.fresh_records
+    assert len({record["qacc"] for record in env.task.records}) == 6
