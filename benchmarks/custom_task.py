@@ -15,7 +15,8 @@ Rows:
     same state with the same controls.
   env.step without the hook / raw: the same task with its `after_substep` hook removed, so
     the hook's own cost is the difference between the two rows.
-  reset / XML compile: `env.reset()` (the torso colour having changed: patched in place) /
+  reset / XML compile: `env.reset()` (the torso colour having changed: patched in place,
+    and the reset's data copied from the last reset's, which a colour does not change) /
     one `mujoco.MjModel.from_xml_string` of the task's XML.
   reset without patching / XML compile: the same with `patch_compiled_model=False`, which
     recompiles (the previous implementation).
