@@ -102,7 +102,7 @@ def test_unsetting_a_value_patches_the_inherited_one(scene):
 @pytest.mark.parametrize(
     "change",
     [
-        # A capsule's size also sets its bounding radius and box, and its body's inertia.
+        # A capsule given by fromto: its compiled size is not the attribute.
         lambda root: setattr(root.find("geom", "upper"), "size", [0.05]),
         # Adds a site: the structure changes.
         lambda root: root.worldbody.add("site", name="marker"),
