@@ -65,10 +65,9 @@ class FieldWrite(NamedTuple):
 
 
 class _Body(NamedTuple):
-    """A compiled body whose geoms are the MJCF element `element`'s `<geom>` children."""
+    """A compiled body and its geoms, the `<geom>` children of one MJCF element."""
 
     body_id: int
-    element: object
     geoms: list
     inertia_from_geoms: bool
 
@@ -228,7 +227,7 @@ def _body(physics, element, body_id: int, settings: _Settings) -> _Body | None:
         from_geoms = True
     else:
         from_geoms = not has_inertial
-    return _Body(body_id, element, list(geoms), from_geoms)
+    return _Body(body_id, list(geoms), from_geoms)
 
 
 def _body_writes(model, body: _Body, new_sizes: dict, settings: _Settings) -> list | None:
