@@ -15,18 +15,24 @@ A change is patched when every changed (element, attribute) of
 `RootElement.attribute_changes_since` is proven, compiled into the Physics and resolvable:
 the value that compiles is set on the element itself or on one of its default classes (see
 `traversal_utils.default_value_source`). A change of a default-class template reaches every
-element of that model whose classes include the template's class. Anything else returns
-False and the caller recompiles.
+element of that model whose classes include the template's class. A geom's `size` feeds
+more fields than its own (bounds, its body's BVH and inertia): `mjcf.geom_size_patch`
+computes those. Anything else returns False and the caller recompiles.
 """
 
 from __future__ import annotations
 
-from typing import NamedTuple
-
 import mujoco
 import numpy as np
 
-from mjcf import attribute_types, constants, patchable_attributes, traversal_utils
+from mjcf import (
+    attribute_types,
+    constants,
+    geom_size_patch,
+    model_statistics,
+    patchable_attributes,
+    traversal_utils,
+)
 from mjcf.binding import element_namespace
 from mjcf.element import Element
 from mujoco_physics.field_layout import FAMILIES, MODEL, ModelLayout
@@ -34,12 +40,11 @@ from mujoco_physics.field_layout import FAMILIES, MODEL, ModelLayout
 __all__ = ["patch_supported", "patch_model"]
 
 
-class _Write(NamedTuple):
-    """One field write of a patch: `array[index] = value`."""
+_Write = geom_size_patch.FieldWrite
 
-    array: np.ndarray
-    index: int | slice
-    value: np.ndarray
+# Pairs whose compiled values feed fields besides their own: they patch through a module
+# that computes those fields too.
+_GEOM_SIZE = ("geom", "size")
 
 
 def patch_supported() -> bool:
@@ -68,6 +73,7 @@ def patch_model(physics, layout: ModelLayout, changes, *, proven: dict | None = 
             return False
         proven = patchable_attributes.PROVEN
     writes = []
+    sized_geoms = {}
     set_const = False
     for element, xml_name in changes:
         if _in_defaults(element):
@@ -77,20 +83,36 @@ def patch_model(physics, layout: ModelLayout, changes, *, proven: dict | None = 
         for target in targets:
             if type(target) is not Element:
                 return False
-            needs = proven.get((target._spec.name, xml_name))
+            pair = (target._spec.name, xml_name)
+            needs = proven.get(pair)
             if needs is None:
                 return False
+            set_const = set_const or needs
+            if pair == _GEOM_SIZE:
+                sized_geoms[id(target)] = target
+                continue
             write = _write_for(physics, layout, target, xml_name)
             if write is None:
                 return False
             writes.append(write)
-            set_const = set_const or needs
+    if sized_geoms:
+        size_writes = geom_size_patch.size_writes(physics, list(sized_geoms.values()))
+        if size_writes is None:
+            return False
+        writes.extend(size_writes)
     for array, index, value in writes:
         array[index] = value
     if writes:
         model = physics.model.ptr
         if set_const:
             mujoco.mj_setConst(model, physics.data.ptr)
+        if sized_geoms:
+            # Sizes move the statistics, which mj_setConst leaves alone.
+            model_statistics.write_statistics(
+                model,
+                model_statistics.compiled_statistics(model),
+                keep=set(physics._mjcf_model.statistic._attributes),
+            )
         physics.mark_as_dirty()
     return True
 

@@ -33,6 +33,7 @@ PROVEN: dict[tuple[str, str], bool] = {
     ("geom", "gap"): True,
     ("geom", "margin"): True,
     ("geom", "rgba"): False,
+    ("geom", "size"): True,
     ("geom", "solimp"): False,
     ("geom", "solmix"): False,
     ("geom", "solref"): False,
@@ -212,7 +213,6 @@ REFUSED: dict[tuple[str, str], str] = {
     "body_iquat, bvh_aabb, bvh_nodeid ...",
     ("geom", "quat"): "actuator_acc0, body_inertia, body_invweight0, body_iquat, bvh_aabb, "
     "data.M ...",
-    ("geom", "size"): "stat.center, stat.extent",
     ("gyro", "cutoff"): "no model of the corpus has it",
     ("gyro", "noise"): "no model of the corpus has it",
     ("gyro", "user"): "no model of the corpus has it",

@@ -152,6 +152,51 @@ _SCENES = {
   </sensor>
 </mujoco>
 """,
+    # A toy building block whose mass and inertia come from its geoms: a hollow shell of
+    # boxes, knobs on top from a default class (a cylinder size that several geoms use),
+    # massless collision helpers and a tube of another density; then a body with an
+    # explicit inertial. Shell inertia, inertia groups and a mass bound besides.
+    "blocks (geom sizes)": """
+<mujoco>
+  <compiler boundmass="0.0001" inertiagrouprange="0 4"/>
+  <default>
+    <geom density="700"/>
+    <default class="knob">
+      <geom type="cylinder" size="0.006 0.003" density="450" margin="0.0002"/>
+    </default>
+    <default class="knob_helper">
+      <geom type="capsule" size="0.004 0.002" mass="0" group="5"/>
+    </default>
+  </default>
+  <worldbody>
+    <geom name="ground" type="plane" size="1 1 0.1"/>
+    <body name="block" pos="0 0 0.1">
+      <freejoint/>
+      <geom name="top" type="box" size="0.016 0.008 0.001" pos="0 0 0.009" mass="0"/>
+      <geom name="side_a" type="box" size="0.016 0.001 0.009" pos="0 0.007 0"/>
+      <geom name="side_b" type="box" size="0.016 0.001 0.009" pos="0 -0.007 0"/>
+      <geom name="end_a" type="box" size="0.001 0.008 0.009" pos="0.015 0 0"/>
+      <geom name="end_b" type="box" size="0.001 0.008 0.009" pos="-0.015 0 0"/>
+      <geom name="knob_1" class="knob" pos="0.008 0.004 0.012"/>
+      <geom name="knob_2" class="knob" pos="-0.008 0.004 0.012"/>
+      <geom name="knob_3" class="knob" pos="0.008 -0.004 0.012"/>
+      <geom name="knob_4" class="knob" pos="-0.008 -0.004 0.012"/>
+      <geom name="helper_1" class="knob_helper" pos="0.008 0.004 0.013" euler="0 90 0"/>
+      <geom name="helper_2" class="knob_helper" pos="-0.008 0.004 0.013" euler="0 90 0"/>
+      <geom name="tube" type="cylinder" size="0.003 0.008" density="300"/>
+      <geom name="bead" type="ellipsoid" size="0.002 0.003 0.004" pos="0 0 -0.004"/>
+      <geom name="pip" type="sphere" size="0.002" pos="0.01 0 -0.004" shellinertia="true"/>
+    </body>
+    <body name="weighted" pos="0.1 0 0.1">
+      <joint name="hinge" axis="0 1 0"/>
+      <inertial pos="0 0 0.01" mass="0.3" diaginertia="0.001 0.001 0.0005"/>
+      <geom name="weight_box" type="box" size="0.02 0.02 0.01"/>
+      <geom name="weight_knob" class="knob" pos="0 0 0.012"/>
+      <geom name="rod" type="capsule" fromto="0 0 0 0 0 0.05" size="0.004"/>
+    </body>
+  </worldbody>
+</mujoco>
+""",
 }
 
 
@@ -231,9 +276,31 @@ _ON_TEMPLATE = "a default-class template"
 _FROM_UNSET = "a value nothing sets (MuJoCo's built-in default)"
 
 
+def _variety(element, pair) -> tuple:
+    """What sets apart elements of one kind of change that are each worth a change.
+
+    For a geom's size (which feeds its bounds, its body's BVH and its body's inertia): the
+    geom's type, whether it is given by `fromto`, and whether its body has an explicit
+    inertial; every template. For any other pair, nothing: one element of a kind suffices.
+    """
+    if pair != ("geom", "size"):
+        return ()
+    if _in_defaults(element):
+        return (id(element),)
+    body = element._parent
+    type_source = traversal_utils.default_value_source(element, "type")
+    return (
+        type_source._attributes["type"] if type_source is not None else "sphere",
+        traversal_utils.default_value_source(element, "fromto") is not None,
+        body._spec.name == "body" and bool(body.get_children("inertial")),
+    )
+
+
 def _sites(root, candidates) -> dict:
-    """(tag, attribute) -> {kind: element}: the first element of each kind of change."""
+    """(tag, attribute) -> {kind: [element, ...]}: the first element of each kind of change
+    and each variety (see `_variety`)."""
     sites = {}
+    seen = set()
     for element in _all_elements(root):
         if type(element) is not Element:
             # Attachment frames and model roots are never patched (see mjcf.model_patch).
@@ -251,7 +318,10 @@ def _sites(root, candidates) -> dict:
                 kind = _FROM_UNSET
             else:
                 kind = _ON_ELEMENT
-            sites.setdefault((tag, name), {}).setdefault(kind, element)
+            key = (tag, name, kind, _variety(element, (tag, name)))
+            if key not in seen:
+                seen.add(key)
+                sites.setdefault((tag, name), {}).setdefault(kind, []).append(element)
     return sites
 
 
@@ -405,13 +475,14 @@ def prove(candidates, extra_models: Path | None = None) -> dict[tuple[str, str],
         base = compile_mjcf_model(root)
         sites = _sites(root, candidates)
         for pair, kinds in sorted(sites.items()):
-            for element in kinds.values():
-                _prove_change(root, base, element, pair, records[pair])
-            element = kinds.get(_ON_ELEMENT)
-            if element is not None and _FROM_UNSET not in kinds:
-                _prove_change_from_unset(root, element, pair, records[pair])
+            for elements in kinds.values():
+                for element in elements:
+                    _prove_change(root, base, element, pair, records[pair])
+            if _ON_ELEMENT in kinds and _FROM_UNSET not in kinds:
+                _prove_change_from_unset(root, kinds[_ON_ELEMENT][0], pair, records[pair])
+        changes = sum(len(elements) for kinds in sites.values() for elements in kinds.values())
         print(
-            f"  {label}: {sum(len(k) for k in sites.values())} changes of {len(sites)} pairs "
+            f"  {label}: {changes} changes of {len(sites)} pairs "
             f"in {time.perf_counter() - started:.1f} s",
             file=sys.stderr,
         )

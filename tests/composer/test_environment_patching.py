@@ -5,6 +5,7 @@ import pytest
 from composer_scene import ReachTask
 
 import composer
+import mjcf
 from composer import environment
 
 
@@ -108,7 +109,66 @@ def test_a_change_that_is_not_patchable_recompiles(monkeypatch):
     task = VariedTask()
     env = composer.Environment(task, random_state=3)
     compiles = _count_compiles(monkeypatch)
-    task.box.geom.size = [0.08, 0.08, 0.08]
+    task.box.geom.pos = [0.01, 0, 0]
     env.reset()
     assert len(compiles) == 1
-    np.testing.assert_array_equal(env.physics.bind(task.box.geom).size, [0.08, 0.08, 0.08])
+    np.testing.assert_array_equal(env.physics.bind(task.box.geom).pos, [0.01, 0, 0])
+
+
+class Brick(composer.Entity):
+    """A toy brick whose mass comes from its geoms: walls, a massless lid, knobs of the
+    default class 'knob' (a cylinder whose radius `initialize_episode_mjcf` draws) and a
+    massless helper capsule."""
+
+    def _build(self, name="brick"):
+        self._model = mjcf.RootElement(model=name)
+        knob = self._model.default.add("default", dclass="knob")
+        knob.geom.set_attributes(type="cylinder", size=[0.005, 0.002], density=500)
+        self.knob_geom = knob.geom
+        body = self._model.worldbody
+        body.add("geom", name="lid", type="box", size=[0.02, 0.01, 0.001], pos=[0, 0, 0.01], mass=0)
+        for side in (-1, 1):
+            body.add("geom", type="box", size=[0.02, 0.001, 0.01], pos=[0, side * 0.009, 0])
+        for x in (-0.01, 0, 0.01):
+            body.add("geom", dclass="knob", pos=[x, 0, 0.012])
+        body.add("geom", type="capsule", size=[0.003, 0.002], pos=[0, 0, 0.013], mass=0)
+
+    def initialize_episode_mjcf(self, random_state):
+        self.knob_geom.size = [random_state.uniform(0.004, 0.006), 0.002]
+
+    @property
+    def mjcf_model(self):
+        return self._model
+
+
+class BrickTask(ReachTask):
+    """The reach task with a brick whose knob radius changes every episode."""
+
+    def __init__(self):
+        super().__init__()
+        self.brick = Brick()
+        self.arena.add_free_entity(self.brick)
+
+    def initialize_episode(self, physics, random_state):
+        super().initialize_episode(physics, random_state)
+        self.brick.set_pose(physics, position=[0.3, 0.3, 0.0105], quaternion=[1, 0, 0, 0])
+
+
+@pytest.mark.patch_table
+def test_a_default_class_cylinder_radius_drawn_every_episode_patches_bit_identically(
+    monkeypatch,
+):
+    patched_env = composer.Environment(BrickTask(), random_state=5)
+    compiled_env = composer.Environment(BrickTask(), random_state=5, patch_compiled_model=False)
+    patched, compiled = _episodes(patched_env, 20), _episodes(compiled_env, 20)
+    for first, second in zip(patched, compiled, strict=True):
+        if isinstance(first, tuple):
+            assert first[0] == second[0]
+            first, second = first[1], second[1]
+        for name in first:
+            assert first[name].tobytes() == second[name].tobytes(), name
+    assert patched_env._last_model_update is environment._ModelUpdate.PATCHED
+    compiles = _count_compiles(monkeypatch)
+    for _ in range(3):
+        patched_env.reset()
+    assert compiles == []

@@ -102,7 +102,7 @@ def test_unsetting_a_value_patches_the_inherited_one(scene):
 @pytest.mark.parametrize(
     "change",
     [
-        # A capsule's size also sets its bounding radius and box, and its body's inertia.
+        # A capsule given by fromto: its compiled size is not the attribute.
         lambda root: setattr(root.find("geom", "upper"), "size", [0.05]),
         # Adds a site: the structure changes.
         lambda root: root.worldbody.add("site", name="marker"),
@@ -195,3 +195,76 @@ def test_set_const_pairs_bring_derived_constants_up_to_date():
     assert _patch(root, physics, count)
     _assert_equals_a_recompile(root, physics)
     assert _model_bytes(model)["cam_pos0"] != _model_bytes(physics.model.ptr)["cam_pos0"]
+
+
+# A block whose mass and inertia come from its geoms: walls of boxes, a massless lid, pegs
+# of a default class whose cylinder size several geoms use, and massless helper capsules.
+_BLOCK = """
+<mujoco model="block">
+  <default>
+    <default class="peg">
+      <geom type="cylinder" size="0.005 0.002" density="600"/>
+    </default>
+  </default>
+  <worldbody>
+    <geom name="floor" type="plane" size="1 1 0.1"/>
+    <body name="block" pos="0 0 0.05">
+      <freejoint/>
+      <geom name="lid" type="box" size="0.02 0.01 0.001" pos="0 0 0.01" mass="0"/>
+      <geom name="wall_1" type="box" size="0.02 0.001 0.01" pos="0 0.009 0"/>
+      <geom name="wall_2" type="box" size="0.02 0.001 0.01" pos="0 -0.009 0"/>
+      <geom name="peg_1" class="peg" pos="0.01 0 0.012"/>
+      <geom name="peg_2" class="peg" pos="-0.01 0 0.012"/>
+      <geom name="peg_3" class="peg" pos="0 0 0.012"/>
+      <geom name="helper" type="capsule" size="0.003 0.002" pos="0 0 0.013" mass="0"/>
+    </body>
+  </worldbody>
+</mujoco>
+"""
+
+
+def _everything(model: mujoco.MjModel) -> dict[str, bytes]:
+    """Every MjModel array, the `stat` fields, and every MjData array after mj_forward."""
+    found = {f"model.{name}": value for name, value in _model_bytes(model).items()}
+    for name in ("center", "extent", "meansize", "meanmass", "meaninertia"):
+        found[f"stat.{name}"] = np.asarray(getattr(model.stat, name)).tobytes()
+    data = mujoco.MjData(model)
+    mujoco.mj_forward(model, data)
+    for name in dir(data):
+        if not name.startswith("_") and isinstance(value := getattr(data, name), np.ndarray):
+            found[f"data.{name}"] = value.tobytes()
+    return found
+
+
+@pytest.mark.patch_table
+def test_a_default_class_cylinder_radius_patches_a_body_whose_inertia_comes_from_geoms():
+    root = mjcf.from_xml_string(_BLOCK)
+    physics = mjcf.Physics.from_mjcf_model(root)
+    before = copy.copy(physics.model.ptr)
+    count = root.modification_count
+    root.default.find("default", "peg").geom.size = [0.0065, 0.002]
+    assert _patch(root, physics, count)
+    patched = _everything(physics.model.ptr)
+    compiled = _everything(mjcf.Physics.from_mjcf_model(root).model.ptr)
+    assert [name for name in compiled if patched[name] != compiled[name]] == []
+    # The change reached what the compiler derives from sizes, not only geom_size.
+    for name in ("body_mass", "body_inertia", "bvh_aabb", "geom_rbound"):
+        assert _model_bytes(before)[name] != _model_bytes(physics.model.ptr)[name]
+    assert before.stat.meanmass != physics.model.stat.meanmass
+
+
+def test_a_geom_size_in_a_model_with_springdamper_recompiles():
+    # The compiler turns springdamper into stiffness and damping with the inertia the
+    # joint moves, which the size of any geom of its tree changes.
+    root = mjcf.from_xml_string(
+        _BLOCK.replace(
+            "<freejoint/>",
+            '<joint name="hinge" axis="0 1 0" springdamper="0.5 1"/>',
+        )
+    )
+    physics = mjcf.Physics.from_mjcf_model(root)
+    before = _model_bytes(physics.model.ptr)
+    count = root.modification_count
+    root.find("geom", "wall_1").size = [0.02, 0.002, 0.01]
+    assert not _patch(root, physics, count)
+    assert _model_bytes(physics.model.ptr) == before
