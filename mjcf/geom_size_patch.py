@@ -27,6 +27,7 @@ depend on the others or move its frame. The statistics (`stat`) that sizes move 
 
 from __future__ import annotations
 
+import weakref
 from typing import NamedTuple
 
 import mujoco
@@ -52,6 +53,16 @@ _PRIMITIVES = frozenset(
 _GEOM_FIELDS = ("geom_rbound", "geom_aabb")
 # Per-body fields the compiler computes from the geoms when the inertia comes from them.
 _INERTIA_FIELDS = ("body_mass", "body_inertia", "body_ipos", "body_iquat")
+# The compiled fields of a geom that its copy is given.
+_GEOM_INPUTS = (
+    "geom_type",
+    "geom_pos",
+    "geom_quat",
+    "geom_group",
+    "geom_contype",
+    "geom_conaffinity",
+    "geom_margin",
+)
 # Per-node fields of the body's bounding volume hierarchy (`bvh_nodeid` is a geom id).
 _BVH_FIELDS = ("bvh_aabb", "bvh_child", "bvh_depth", "bvh_nodeid")
 
@@ -69,7 +80,13 @@ class _Body(NamedTuple):
 
     body_id: int
     geoms: list
+    geom_ids: range  # the geoms' compiled ids, consecutive
     inertia_from_geoms: bool
+
+    @property
+    def first(self) -> int:
+        """The compiled id of the body's first geom."""
+        return self.geom_ids.start
 
 
 def size_writes(physics, geoms: list) -> list[FieldWrite] | None:
@@ -107,13 +124,11 @@ def size_writes(physics, geoms: list) -> list[FieldWrite] | None:
             if body is None:
                 return None
             bodies[body_id] = body
+    body_writes = _bodies_writes(physics, list(bodies.values()), new_sizes, settings)
+    if body_writes is None:
+        return None
     writes = [FieldWrite(model.geom_size, geom_id, size) for geom_id, size in new_sizes.items()]
-    for body in bodies.values():
-        body_writes = _body_writes(model, body, new_sizes, settings)
-        if body_writes is None:
-            return None
-        writes.extend(body_writes)
-    return writes
+    return writes + body_writes
 
 
 def _geom_id(physics, geom) -> int | None:
@@ -150,7 +165,7 @@ class _Settings(NamedTuple):
     """The `<compiler>` settings that the one-body model copies."""
 
     inertiafromgeom: mujoco.mjtInertiaFromGeom
-    inertiagrouprange: np.ndarray
+    inertiagrouprange: tuple[int, int]
     boundmass: float
     boundinertia: float
     balanceinertia: bool
@@ -193,8 +208,9 @@ def _compiler_settings(root) -> _Settings | None:
         return None
     return _Settings(
         inertiafromgeom=inertiafromgeom,
-        inertiagrouprange=np.asarray(
-            attributes.get("inertiagrouprange", spec_defaults.inertiagrouprange)
+        inertiagrouprange=tuple(
+            int(group)
+            for group in attributes.get("inertiagrouprange", spec_defaults.inertiagrouprange)
         ),
         boundmass=float(attributes.get("boundmass", spec_defaults.boundmass)),
         boundinertia=float(attributes.get("boundinertia", spec_defaults.boundinertia)),
@@ -213,7 +229,8 @@ def _body(physics, element, body_id: int, settings: _Settings) -> _Body | None:
     geoms = element.get_children("geom")
     ids = [_geom_id(physics, geom) for geom in geoms]
     first = int(model.body_geomadr[body_id])
-    if ids != list(range(first, first + int(model.body_geomnum[body_id]))):
+    geom_ids = range(first, first + int(model.body_geomnum[body_id]))
+    if ids != list(geom_ids):
         return None
     if any(int(model.geom_type[i]) not in _PRIMITIVES for i in ids):
         return None
@@ -227,49 +244,133 @@ def _body(physics, element, body_id: int, settings: _Settings) -> _Body | None:
         from_geoms = True
     else:
         from_geoms = not has_inertial
-    return _Body(body_id, list(geoms), from_geoms)
+    return _Body(body_id, list(geoms), geom_ids, from_geoms)
 
 
-def _body_writes(model, body: _Body, new_sizes: dict, settings: _Settings) -> list | None:
-    """The writes of `body`'s derived fields, or None when the one-body model does not
-    reproduce the compiled model's values from the old sizes."""
-    first = int(model.body_geomadr[body.body_id])
-    ids = range(first, first + len(body.geoms))
-    old = _compile_alone(model, body, [model.geom_size[i] for i in ids], settings)
-    new = _compile_alone(model, body, [new_sizes.get(i, model.geom_size[i]) for i in ids], settings)
-    if old is None or new is None:
-        return None
-    alone_id = min(body.body_id, 1)
-    old_rows, new_rows = _rows(old, alone_id, first), _rows(new, alone_id, first)
-    current = _current_rows(model, body, first)
-    fields = _GEOM_FIELDS + _BVH_FIELDS + (_INERTIA_FIELDS if body.inertia_from_geoms else ())
-    if any(_bytes(old_rows[name]) != _bytes(current[name]) for name in fields):
-        return None
-    # A body whose inertial frame stops (or starts) being its own frame is compiled as
-    # simple or not accordingly; mj_setConst does not revisit that.
-    if old.body_sameframe[alone_id] != new.body_sameframe[alone_id]:
-        return None
-    bvh = slice(
-        int(model.body_bvhadr[body.body_id]),
-        int(model.body_bvhadr[body.body_id] + model.body_bvhnum[body.body_id]),
-    )
-    geoms = slice(first, first + len(body.geoms))
-    writes = [FieldWrite(getattr(model, name), geoms, new_rows[name]) for name in _GEOM_FIELDS]
-    writes += [FieldWrite(getattr(model, name), bvh, new_rows[name]) for name in _BVH_FIELDS]
-    if body.inertia_from_geoms:
-        writes += [
-            FieldWrite(getattr(model, name), body.body_id, new_rows[name])
-            for name in _INERTIA_FIELDS
+class _Copies:
+    """Copies of some bodies' geoms, in one `MjSpec` compiled as a model of its own, kept
+    between patches with the rows the last compile gave and the inputs it was built from.
+
+    The bodies keep their order; the world's geoms (body 0) are the copy's world's, the
+    others' are bodies 1, 2, ... of it. A patch sets the new sizes on the spec's geoms and
+    compiles it again: the spec is built, and checked against the compiled model, once.
+    """
+
+    __slots__ = ("bodies", "spec", "geoms", "inputs", "rows")
+
+    def __init__(self, model, bodies: list[_Body], settings: _Settings):
+        self.bodies = bodies
+        self.spec = _spec_of(model, bodies, settings)
+        self.geoms = [geom for body in self.spec.bodies for geom in body.geoms]
+        self.inputs = _inputs(model, bodies)
+        self.rows = None
+
+    def compile(self, sizes: list) -> list[dict[str, np.ndarray]] | None:
+        """Each body's rows with the geoms of all bodies sized `sizes` (in body order)."""
+        for geom, size in zip(self.geoms, sizes):
+            geom.size = size
+        try:
+            alone = self.spec.compile()
+        except ValueError:
+            return None
+        return [
+            _rows(alone, alone_id, int(alone.body_geomadr[alone_id]), body.first)
+            for alone_id, body in zip(_alone_ids(self.bodies), self.bodies)
         ]
+
+    def matches(self, model) -> bool:
+        """Whether the compiled model still holds what this copy was built from and gave
+        last (a recompile of other values in between would show in one of them)."""
+        return _same(self.inputs, _inputs(model, self.bodies)) and all(
+            _same(_current_rows(model, body), rows) for body, rows in zip(self.bodies, self.rows)
+        )
+
+
+# Per Physics, the copies made for it, by the ids of the bodies they hold and the settings.
+_COPIES: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
+
+
+def _bodies_writes(physics, bodies: list[_Body], new_sizes: dict, settings: _Settings):
+    """The writes of the bodies' derived fields, or None when the copy of the bodies does
+    not reproduce the compiled model's values from the sizes it holds."""
+    model = physics.model.ptr
+    copies_of = _COPIES.setdefault(physics, {})
+    key = (tuple(body.body_id for body in bodies), settings)
+    copies = copies_of.get(key)
+    if copies is None or not copies.matches(model):
+        copies = _Copies(model, bodies, settings)
+        old = copies.compile([model.geom_size[i] for body in bodies for i in body.geom_ids])
+        if old is None or not all(
+            _same(_current_rows(model, body), rows) for body, rows in zip(bodies, old)
+        ):
+            copies_of.pop(key, None)
+            return None
+        copies.rows = old
+        copies_of[key] = copies
+    sizes = [new_sizes.get(i, model.geom_size[i]) for body in bodies for i in body.geom_ids]
+    new = copies.compile(sizes)
+    if new is None:
+        copies_of.pop(key, None)
+        return None
+    writes = []
+    for body, old_rows, new_rows in zip(bodies, copies.rows, new):
+        # A body whose inertial frame stops (or starts) being its own frame is compiled as
+        # simple or not accordingly; mj_setConst does not revisit that.
+        if old_rows["body_sameframe"] != new_rows["body_sameframe"]:
+            copies_of.pop(key, None)
+            return None
+        writes += _writes_of(model, body, new_rows)
+    copies.rows = new
+    copies.inputs = _inputs(model, bodies, sizes)
     return writes
+
+
+def _writes_of(model, body: _Body, rows: dict) -> list[FieldWrite]:
+    b = body.body_id
+    bvh = slice(int(model.body_bvhadr[b]), int(model.body_bvhadr[b] + model.body_bvhnum[b]))
+    geoms = slice(body.first, body.first + len(body.geom_ids))
+    writes = [FieldWrite(getattr(model, name), geoms, rows[name]) for name in _GEOM_FIELDS]
+    writes += [FieldWrite(getattr(model, name), bvh, rows[name]) for name in _BVH_FIELDS]
+    if body.inertia_from_geoms:
+        writes += [FieldWrite(getattr(model, name), b, rows[name]) for name in _INERTIA_FIELDS]
+    return writes
+
+
+def _same(first: dict, second: dict) -> bool:
+    """Whether every array of `first` has the bytes of `second`'s of the same name."""
+    return all(_bytes(value) == _bytes(second[name]) for name, value in first.items())
 
 
 def _bytes(array) -> bytes:
     return np.ascontiguousarray(array).tobytes()
 
 
-def _compile_alone(model, body: _Body, sizes: list, settings: _Settings) -> mujoco.MjModel | None:
-    """A model of one body that holds `body`'s geoms with `sizes`, compiled."""
+def _alone_ids(bodies: list[_Body]) -> list[int]:
+    """The ids the bodies have in their copy: 0 for the world, then 1, 2, ..."""
+    ids, next_id = [], 1
+    for body in bodies:
+        if body.body_id == 0:
+            ids.append(0)
+        else:
+            ids.append(next_id)
+            next_id += 1
+    return ids
+
+
+def _inputs(model, bodies: list[_Body], sizes: list | None = None) -> dict[str, np.ndarray]:
+    """What the copy takes from the compiled model: its geoms' fields (their sizes as
+    `sizes`, when given) and the explicit inertias."""
+    ids = [i for body in bodies for i in body.geom_ids]
+    inputs = {name: getattr(model, name)[ids] for name in _GEOM_INPUTS}
+    inputs["geom_size"] = model.geom_size[ids] if sizes is None else np.asarray(sizes)
+    explicit = [body.body_id for body in bodies if not body.inertia_from_geoms]
+    inputs.update({name: getattr(model, name)[explicit] for name in _INERTIA_FIELDS})
+    return inputs
+
+
+def _spec_of(model, bodies: list[_Body], settings: _Settings) -> mujoco.MjSpec:
+    """An `MjSpec` holding copies of the bodies' geoms (in `_Copies`'s order) under the
+    compiler's inertia settings; their sizes are set before each compile."""
     spec = mujoco.MjSpec()
     compiler = spec.compiler
     compiler.inertiafromgeom = settings.inertiafromgeom
@@ -277,64 +378,61 @@ def _compile_alone(model, body: _Body, sizes: list, settings: _Settings) -> mujo
     compiler.boundmass = settings.boundmass
     compiler.boundinertia = settings.boundinertia
     compiler.balanceinertia = settings.balanceinertia
-    b = body.body_id
-    if b == 0:
-        alone = spec.worldbody
-    else:
-        alone = spec.worldbody.add_body()
-        if not body.inertia_from_geoms:
-            # The BVH is expressed in the body's inertial frame.
-            alone.explicitinertial = True
-            alone.mass = float(model.body_mass[b])
-            alone.inertia = model.body_inertia[b]
-            alone.ipos = model.body_ipos[b]
-            alone.iquat = model.body_iquat[b]
-    first = int(model.body_geomadr[b])
-    for offset, (geom, size) in enumerate(zip(body.geoms, sizes)):
-        i = first + offset
-        copy = alone.add_geom(
-            type=mujoco.mjtGeom(model.geom_type[i]),
-            size=size,
-            pos=model.geom_pos[i],
-            quat=model.geom_quat[i],
-            group=int(model.geom_group[i]),
-            contype=int(model.geom_contype[i]),
-            conaffinity=int(model.geom_conaffinity[i]),
-            margin=float(model.geom_margin[i]),
-        )
-        for xml_name, spec_name in (("mass", "mass"), ("density", "density")):
-            source = traversal_utils.default_value_source(geom, xml_name)
-            if source is not None:
-                setattr(copy, spec_name, float(source._attributes[xml_name]))
-        source = traversal_utils.default_value_source(geom, "shellinertia")
-        if source is not None and _true(source._attributes["shellinertia"]):
-            copy.typeinertia = mujoco.mjtGeomInertia.mjINERTIA_SHELL
-    try:
-        return spec.compile()
-    except ValueError:
-        return None
+    for body in bodies:
+        b = body.body_id
+        if b == 0:
+            alone = spec.worldbody
+        else:
+            alone = spec.worldbody.add_body()
+            if not body.inertia_from_geoms:
+                # The BVH is expressed in the body's inertial frame.
+                alone.explicitinertial = True
+                alone.mass = float(model.body_mass[b])
+                alone.inertia = model.body_inertia[b]
+                alone.ipos = model.body_ipos[b]
+                alone.iquat = model.body_iquat[b]
+        for geom, i in zip(body.geoms, body.geom_ids):
+            copy = alone.add_geom(
+                type=mujoco.mjtGeom(model.geom_type[i]),
+                pos=model.geom_pos[i],
+                quat=model.geom_quat[i],
+                group=int(model.geom_group[i]),
+                contype=int(model.geom_contype[i]),
+                conaffinity=int(model.geom_conaffinity[i]),
+                margin=float(model.geom_margin[i]),
+            )
+            for name in ("mass", "density"):
+                source = traversal_utils.default_value_source(geom, name)
+                if source is not None:
+                    setattr(copy, name, float(source._attributes[name]))
+            source = traversal_utils.default_value_source(geom, "shellinertia")
+            if source is not None and _true(source._attributes["shellinertia"]):
+                copy.typeinertia = mujoco.mjtGeomInertia.mjINERTIA_SHELL
+    return spec
 
 
-def _rows(alone: mujoco.MjModel, b: int, first: int) -> dict[str, np.ndarray]:
-    """The one-body model's values of the copied fields of its body `b` (0 or 1), geom ids
-    as in the compiled model, whose body has them from `first` on."""
+def _rows(alone: mujoco.MjModel, b: int, alone_first: int, first: int) -> dict[str, np.ndarray]:
+    """The copy's values of the derived fields of its body `b`, whose geoms start at
+    `alone_first`, with geom ids as in the compiled model, where they start at `first`."""
     bvh = slice(int(alone.body_bvhadr[b]), int(alone.body_bvhadr[b] + alone.body_bvhnum[b]))
     rows = {name: getattr(alone, name)[bvh].copy() for name in _BVH_FIELDS}
     nodeid = rows["bvh_nodeid"]
-    shift = first - int(alone.body_geomadr[b])
-    rows["bvh_nodeid"] = np.where(nodeid >= 0, nodeid + shift, nodeid)
-    geoms = slice(int(alone.body_geomadr[b]), int(alone.body_geomadr[b] + alone.body_geomnum[b]))
+    rows["bvh_nodeid"] = np.where(nodeid >= 0, nodeid + (first - alone_first), nodeid)
+    geoms = slice(alone_first, alone_first + int(alone.body_geomnum[b]))
     rows.update({name: getattr(alone, name)[geoms].copy() for name in _GEOM_FIELDS})
     rows.update({name: getattr(alone, name)[b].copy() for name in _INERTIA_FIELDS})
+    rows["body_sameframe"] = alone.body_sameframe[b].copy()
     return rows
 
 
-def _current_rows(model, body: _Body, first: int) -> dict[str, np.ndarray]:
-    """The compiled model's values of the copied fields for `body`."""
+def _current_rows(model, body: _Body) -> dict[str, np.ndarray]:
+    """The compiled model's values of the derived fields for `body` (its inertia only
+    where it comes from the geoms)."""
     b = body.body_id
     bvh = slice(int(model.body_bvhadr[b]), int(model.body_bvhadr[b] + model.body_bvhnum[b]))
     rows = {name: getattr(model, name)[bvh] for name in _BVH_FIELDS}
-    geoms = slice(first, first + len(body.geoms))
+    geoms = slice(body.first, body.first + len(body.geom_ids))
     rows.update({name: getattr(model, name)[geoms] for name in _GEOM_FIELDS})
-    rows.update({name: getattr(model, name)[b] for name in _INERTIA_FIELDS})
+    if body.inertia_from_geoms:
+        rows.update({name: getattr(model, name)[b] for name in _INERTIA_FIELDS})
     return rows

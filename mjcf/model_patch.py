@@ -110,7 +110,7 @@ def patch_model(physics, layout: ModelLayout, changes, *, proven: dict | None = 
             # Sizes move the statistics, which mj_setConst leaves alone.
             model_statistics.write_statistics(
                 model,
-                model_statistics.compiled_statistics(model),
+                model_statistics.compiled_statistics(model, physics.data.ptr),
                 keep=set(physics._mjcf_model.statistic._attributes),
             )
         physics.mark_as_dirty()

@@ -41,17 +41,24 @@ class Statistics(NamedTuple):
     meaninertia: float
 
 
-def compiled_statistics(model: mujoco.MjModel) -> Statistics:
+def compiled_statistics(model: mujoco.MjModel, data: mujoco.MjData) -> Statistics:
     """The statistics a compile of `model` would give, before `<statistic>` overrides.
+
+    Args:
+      model: the model, its constants up to date (`mj_setConst`).
+      data: an MjData of `model`, used as scratch space: it is reset to `qpos0` and left
+        with the positions and the mass matrix there.
 
     Returns:
       `Statistics`; a field the compiler leaves alone (the extent of a model with no
       spread, the means of a model without bodies or degrees of freedom) keeps `model`'s
       current value.
     """
-    data = mujoco.MjData(model)
+    # What the statistics read of a forward at qpos0: the positions and the mass matrix.
     mujoco.mj_resetData(model, data)
-    mujoco.mj_forward(model, data)
+    mujoco.mj_kinematics(model, data)
+    mujoco.mj_comPos(model, data)
+    mujoco.mj_makeM(model, data)
 
     # Bounding box of body frames, centres of mass, joint anchors, sites and geoms.
     points = np.concatenate([data.xpos[1:], data.xipos[1:], data.xanchor, data.site_xpos])

@@ -31,14 +31,14 @@ _SCENE = """
 @pytest.mark.parametrize("xml", [_SCENE, _SCENE.replace('size="2 1 0.1"', 'size="0 0 0.1"')])
 def test_statistics_equal_the_compilers_bit_for_bit(xml):
     model = mujoco.MjModel.from_xml_string(xml)
-    statistics = model_statistics.compiled_statistics(model)
+    statistics = model_statistics.compiled_statistics(model, mujoco.MjData(model))
     for name, value in statistics._asdict().items():
         assert np.asarray(value).tobytes() == np.asarray(getattr(model.stat, name)).tobytes(), name
 
 
 def test_fields_the_model_sets_are_kept():
     model = mujoco.MjModel.from_xml_string(_SCENE)
-    statistics = model_statistics.compiled_statistics(model)._replace(meanmass=5.0, extent=7.0)
+    statistics = model_statistics.compiled_statistics(model, mujoco.MjData(model))._replace(meanmass=5.0, extent=7.0)
     model_statistics.write_statistics(model, statistics, keep={"extent"})
     assert model.stat.meanmass == 5.0
     assert model.stat.extent != 7.0
