@@ -12,6 +12,7 @@ import pytest
 
 import mjcf
 from mjcf import model_patch, patchable_attributes
+from mujoco_physics.model_snapshot import ModelSnapshot
 
 _SCENE = """
 <mujoco model="scene">
@@ -268,3 +269,24 @@ def test_a_geom_size_in_a_model_with_springdamper_recompiles():
     root.find("geom", "wall_1").size = [0.02, 0.002, 0.01]
     assert not _patch(root, physics, count)
     assert _model_bytes(physics.model.ptr) == before
+
+
+@pytest.mark.patch_table
+def test_patches_in_a_row_each_equal_a_recompile_after_other_values_were_loaded():
+    root = mjcf.from_xml_string(_BLOCK)
+    physics = mjcf.Physics.from_mjcf_model(root)
+    snapshot = ModelSnapshot(physics.model.ptr)
+    peg = root.default.find("default", "peg").geom
+    for radius in (0.006, 0.0045, 0.0052):
+        count = root.modification_count
+        peg.size = [radius, 0.002]
+        assert _patch(root, physics, count)
+        compiled = mjcf.Physics.from_mjcf_model(root).model.ptr
+        patched = _everything(physics.model.ptr)
+        assert [
+            name for name, value in _everything(compiled).items() if patched[name] != value
+        ] == []
+        # A value that does not patch changes between patches: the environment compiles it
+        # and loads the new parameters into the same model.
+        root.find("geom", "wall_1").density = 500 + 1000 * radius
+        assert snapshot.load(mjcf.Physics.from_mjcf_model(root).model.ptr)

@@ -38,7 +38,8 @@ def test_statistics_equal_the_compilers_bit_for_bit(xml):
 
 def test_fields_the_model_sets_are_kept():
     model = mujoco.MjModel.from_xml_string(_SCENE)
-    statistics = model_statistics.compiled_statistics(model, mujoco.MjData(model))._replace(meanmass=5.0, extent=7.0)
+    statistics = model_statistics.compiled_statistics(model, mujoco.MjData(model))
+    statistics = statistics._replace(meanmass=5.0, extent=7.0)
     model_statistics.write_statistics(model, statistics, keep={"extent"})
     assert model.stat.meanmass == 5.0
     assert model.stat.extent != 7.0
