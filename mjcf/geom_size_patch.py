@@ -104,7 +104,7 @@ def size_writes(physics, geoms: list) -> list[FieldWrite] | None:
     """
     model = physics.model.ptr
     settings = _compiler_settings(physics._mjcf_model)
-    if settings is None or model.nflex or _springdamper_anywhere(physics._mjcf_model):
+    if settings is None or model.nflex or _springdamper_anywhere(physics):
         return None
     new_sizes = {}
     bodies = {}
@@ -171,14 +171,34 @@ class _Settings(NamedTuple):
     balanceinertia: bool
 
 
-def _springdamper_anywhere(root) -> bool:
-    """Whether a joint of `root` takes its stiffness and damping from `springdamper`, which
-    the compiler converts with the inertia the joint moves (its whole tree's, not only the
-    bodies below it)."""
-    return any(
+# Per Physics: the model's modification count when its joints were last looked at, and
+# whether one of them had `springdamper`.
+_SPRINGDAMPER_SCANS: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
+
+
+def _springdamper_anywhere(physics) -> bool:
+    """Whether a joint of `physics`'s MJCF model takes its stiffness and damping from
+    `springdamper`, which the compiler converts with the inertia the joint moves (its whole
+    tree's, not only the bodies below it).
+
+    The joints are looked at again only when the model changed since the last look in
+    more than attributes of geoms and geom defaults (a joint's attribute, or its
+    structure), which patch after patch of sizes does not.
+    """
+    root = physics._mjcf_model
+    scan = _SPRINGDAMPER_SCANS.get(physics)
+    if scan is not None:
+        count, found = scan
+        changes = root.attribute_changes_since(count)
+        if changes is not None and all(element.tag == "geom" for element, _ in changes):
+            _SPRINGDAMPER_SCANS[physics] = (root.modification_count, found)
+            return found
+    found = any(
         traversal_utils.default_value_source(joint, "springdamper") is not None
         for joint in root.find_all("joint")
     )
+    _SPRINGDAMPER_SCANS[physics] = (root.modification_count, found)
+    return found
 
 
 def _children(element, tag: str) -> list:

@@ -290,3 +290,21 @@ def test_patches_in_a_row_each_equal_a_recompile_after_other_values_were_loaded(
         # and loads the new parameters into the same model.
         root.find("geom", "wall_1").density = 500 + 1000 * radius
         assert snapshot.load(mjcf.Physics.from_mjcf_model(root).model.ptr)
+
+
+@pytest.mark.patch_table
+def test_a_springdamper_set_after_a_size_patch_stops_the_next_one():
+    root = mjcf.from_xml_string(
+        _BLOCK.replace("<freejoint/>", '<joint name="hinge" axis="0 1 0"/>')
+    )
+    physics = mjcf.Physics.from_mjcf_model(root)
+    snapshot = ModelSnapshot(physics.model.ptr)
+    peg = root.default.find("default", "peg").geom
+    count = root.modification_count
+    peg.size = [0.006, 0.002]
+    assert _patch(root, physics, count)
+    root.find("joint", "hinge").springdamper = [0.5, 1]
+    assert snapshot.load(mjcf.Physics.from_mjcf_model(root).model.ptr)
+    count = root.modification_count
+    peg.size = [0.0045, 0.002]
+    assert not _patch(root, physics, count)
