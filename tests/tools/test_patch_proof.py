@@ -6,13 +6,14 @@ from tools import patch_proof
 
 
 @pytest.mark.patch_table
-def test_colour_is_proven_and_geom_size_and_body_pos_are_refused_with_their_fields():
+def test_colour_and_geom_size_are_proven_and_positions_are_refused_with_their_fields():
     proven, refused = patch_proof._verdicts(
-        patch_proof.prove({("geom", "rgba"), ("geom", "size"), ("body", "pos")})
+        patch_proof.prove({("geom", "rgba"), ("geom", "size"), ("geom", "pos"), ("body", "pos")})
     )
-    assert proven == {("geom", "rgba"): False}
-    # A sphere's size also sets the scene's extent; a body's position changes derived constants.
-    assert "stat.extent" in refused["geom", "size"]
+    # A size moves the body's inertia and the model's statistics: mj_setConst must follow.
+    assert proven == {("geom", "rgba"): False, ("geom", "size"): True}
+    # A geom's position moves its body's inertial frame; a body's, derived constants.
+    assert "body_ipos" in refused["geom", "pos"]
     assert "body_invweight0" in refused["body", "pos"]
 
 
