@@ -34,15 +34,18 @@ class ResetState:
     instead of recomputing it while that is exact.
 
     The kept data belongs to one MjModel object: a reset of a Physics with another model
-    (a recompile) resets afresh. A reset whose forward warned keeps nothing, so the next
-    one raises (or logs) the warning again.
+    (a recompile) resets afresh. Data is kept from the second reset of a model on, so a
+    model that is reset once (a task whose structure changes every episode) costs no
+    MjData of its own. A reset whose forward warned keeps nothing, so the next one raises
+    (or logs) the warning again.
     """
 
-    __slots__ = ("_model", "_data")
+    __slots__ = ("_model", "_data", "_seen")
 
     def __init__(self):
-        self._model: mujoco.MjModel | None = None
+        self._model: mujoco.MjModel | None = None  # the model `_data` is valid for
         self._data: mujoco.MjData | None = None
+        self._seen: mujoco.MjModel | None = None  # the model of the last reset afresh
 
     def invalidate(self) -> None:
         """Forgets the kept data: the model may have changed in a field forward reads."""
@@ -60,8 +63,9 @@ class ResetState:
             return
         self._model = None
         physics.reset()
+        first_reset, self._seen = self._seen is not model, model
         # A forward that warned is not kept: resetting again warns (or raises) again.
-        if _outside_code_takes_part(model) or physics.data.ptr.warning.number.any():
+        if first_reset or _outside_code_takes_part(model) or physics.data.ptr.warning.number.any():
             return
         if self._data is None or self._data.model is not model:
             self._data = mujoco.MjData(model)

@@ -100,6 +100,7 @@ def test_resets_read_and_play_as_resets_that_recompile(vary_contacts):
 def test_when_only_colours_change_resets_copy_the_data_instead_of_a_forward(monkeypatch):
     env = composer.Environment(RecordingTask(vary_contacts=False), random_state=5)
     env.reset()
+    env.reset()  # the data is kept from a model's second reset on
     resets = _count_physics_resets(monkeypatch)
     for _ in range(4):
         env.reset()

@@ -89,8 +89,20 @@ def test_a_reset_after_an_episode_leaves_the_bytes_of_a_fresh_reset():
         _play_an_episode(physics)
 
 
+def test_data_is_kept_from_the_second_reset_of_a_model_on(monkeypatch):
+    physics, state = _physics(), ResetState()
+    resets = []
+    original = Physics.reset
+    monkeypatch.setattr(Physics, "reset", lambda self: resets.append(self) or original(self))
+    for _ in range(4):
+        state.reset(physics)
+        _play_an_episode(physics)
+    assert len(resets) == 2
+
+
 def test_the_owner_must_invalidate_after_changing_a_field_forward_reads():
     physics, state = _physics(), ResetState()
+    state.reset(physics)
     state.reset(physics)
     physics.model.geom_solref[1] = [0.05, 0.5]  # softer contact: other contact forces
     expected = _fresh_reset(physics)
