@@ -485,6 +485,20 @@ def create(sim, layout: ModelLayout, root, elements, single: bool) -> Binding:
     return _binding_class(family)._from_ids(sim, layout, family, ids, False, f"[{label}]")
 
 
+def object_id(layout: ModelLayout, root, element) -> int:
+    """The id of `element`'s compiled object in the model `layout` describes, compiled from
+    `root`: what `create(...).element_id` gives, without making a binding.
+
+    Raises:
+      ValueError: for an element with no compiled counterpart, or of another model.
+    """
+    namespace = element_namespace(element)
+    family = field_layout.FAMILIES.get(namespace) if namespace is not None else None
+    if family is None:
+        raise ValueError(f"{describe(element)} is not compiled into a MuJoCo object")
+    return _object_id(layout, family, root, element)
+
+
 def _is_mocap(element) -> bool:
     return getattr(element, "mocap", None) == "true"
 

@@ -33,7 +33,7 @@ from typing import NamedTuple
 import mujoco
 import numpy as np
 
-from mjcf import traversal_utils
+from mjcf import binding, traversal_utils
 from mjcf.element import Element
 
 __all__ = ["FieldWrite", "size_writes"]
@@ -133,7 +133,7 @@ def size_writes(physics, geoms: list) -> list[FieldWrite] | None:
 
 def _geom_id(physics, geom) -> int | None:
     try:
-        return physics.bind(geom).element_id
+        return binding.object_id(physics._layout, physics._mjcf_model, geom)
     except ValueError:
         return None
 
@@ -269,44 +269,63 @@ def _body(physics, element, body_id: int, settings: _Settings) -> _Body | None:
 
 class _Copies:
     """Copies of some bodies' geoms, in one `MjSpec` compiled as a model of its own, kept
-    between patches with the rows the last compile gave and the inputs it was built from.
+    between patches with the sizes and rows its last compile had and gave.
 
     The bodies keep their order; the world's geoms (body 0) are the copy's world's, the
     others' are bodies 1, 2, ... of it. A patch sets the new sizes on the spec's geoms and
-    compiles it again: the spec is built, and checked against the compiled model, once.
+    compiles it again. The spec is built once and serves every Physics compiled from the
+    same MJCF model while the compiled values it was built from (all but the sizes) stay
+    the same; where the compiled model holds other sizes than the copy last had (it was
+    recompiled in between), the copy is first compiled with those and checked again.
     """
 
-    __slots__ = ("bodies", "spec", "geoms", "inputs", "rows")
+    __slots__ = ("geoms", "spec", "spec_geoms", "inputs", "sizes", "rows")
 
     def __init__(self, model, bodies: list[_Body], settings: _Settings):
-        self.bodies = bodies
+        self.geoms = [geom for body in bodies for geom in body.geoms]
         self.spec = _spec_of(model, bodies, settings)
-        self.geoms = [geom for body in self.spec.bodies for geom in body.geoms]
+        self.spec_geoms = [geom for body in self.spec.bodies for geom in body.geoms]
         self.inputs = _inputs(model, bodies)
+        self.sizes = None
         self.rows = None
 
-    def compile(self, sizes: list) -> list[dict[str, np.ndarray]] | None:
-        """Each body's rows with the geoms of all bodies sized `sizes` (in body order)."""
-        for geom, size in zip(self.geoms, sizes):
+    def compile(self, bodies: list[_Body], sizes: np.ndarray) -> list[dict] | None:
+        """Each body's rows with the geoms of all bodies sized `sizes` (in body order),
+        geom ids as in the compiled model of `bodies`."""
+        for geom, size in zip(self.spec_geoms, sizes):
             geom.size = size
         try:
             alone = self.spec.compile()
         except ValueError:
             return None
+        self.sizes = sizes
         return [
             _rows(alone, alone_id, int(alone.body_geomadr[alone_id]), body.first)
-            for alone_id, body in zip(_alone_ids(self.bodies), self.bodies)
+            for alone_id, body in zip(_alone_ids(bodies), bodies)
         ]
 
-    def matches(self, model) -> bool:
-        """Whether the compiled model still holds what this copy was built from and gave
-        last (a recompile of other values in between would show in one of them)."""
-        return _same(self.inputs, _inputs(model, self.bodies)) and all(
-            _same(_current_rows(model, body), rows) for body, rows in zip(self.bodies, self.rows)
+    def built_from(self, model, bodies: list[_Body]) -> bool:
+        """Whether `bodies` are the ones this copy holds, and their compiled model holds
+        the values (other than sizes) the copy was built from."""
+        geoms = [geom for body in bodies for geom in body.geoms]
+        return (
+            len(geoms) == len(self.geoms)
+            and all(mine is theirs for mine, theirs in zip(self.geoms, geoms))
+            and _same(self.inputs, _inputs(model, bodies))
+        )
+
+    def gave(self, model, bodies: list[_Body]) -> bool:
+        """Whether the compiled model holds the sizes and rows of the copy's last compile."""
+        return (
+            self.rows is not None
+            and _bytes(self.sizes) == _bytes(_sizes(model, bodies))
+            and all(
+                _same(_current_rows(model, body), rows) for body, rows in zip(bodies, self.rows)
+            )
         )
 
 
-# Per Physics, the copies made for it, by the ids of the bodies they hold and the settings.
+# Per MJCF model, the copies made for its Physics, by their bodies' geoms and the settings.
 _COPIES: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
 
 
@@ -314,35 +333,59 @@ def _bodies_writes(physics, bodies: list[_Body], new_sizes: dict, settings: _Set
     """The writes of the bodies' derived fields, or None when the copy of the bodies does
     not reproduce the compiled model's values from the sizes it holds."""
     model = physics.model.ptr
-    copies_of = _COPIES.setdefault(physics, {})
-    key = (tuple(body.body_id for body in bodies), settings)
+    copies_of = _COPIES.setdefault(physics._mjcf_model, {})
+    key = (
+        tuple(
+            (id(geom), body.body_id == 0, body.inertia_from_geoms)
+            for body in bodies
+            for geom in body.geoms
+        ),
+        settings,
+    )
     copies = copies_of.get(key)
-    if copies is None or not copies.matches(model):
-        copies = _Copies(model, bodies, settings)
-        old = copies.compile([model.geom_size[i] for body in bodies for i in body.geom_ids])
-        if old is None or not all(
-            _same(_current_rows(model, body), rows) for body, rows in zip(bodies, old)
-        ):
-            copies_of.pop(key, None)
+    if copies is None or not copies.built_from(model, bodies):
+        copies = copies_of[key] = _Copies(model, bodies, settings)
+    if not copies.gave(model, bodies) and not _check(copies, model, bodies):
+        # What changed since may be an MJCF value the copy took (a density): build it anew.
+        copies = copies_of[key] = _Copies(model, bodies, settings)
+        if not _check(copies, model, bodies):
+            del copies_of[key]
             return None
-        copies.rows = old
-        copies_of[key] = copies
-    sizes = [new_sizes.get(i, model.geom_size[i]) for body in bodies for i in body.geom_ids]
-    new = copies.compile(sizes)
+    sizes = _sizes(model, bodies)
+    for row, i in enumerate(i for body in bodies for i in body.geom_ids):
+        if i in new_sizes:
+            sizes[row] = new_sizes[i]
+    old_rows, new = copies.rows, copies.compile(bodies, sizes)
     if new is None:
-        copies_of.pop(key, None)
+        del copies_of[key]
         return None
     writes = []
-    for body, old_rows, new_rows in zip(bodies, copies.rows, new):
+    for body, before, after in zip(bodies, old_rows, new):
         # A body whose inertial frame stops (or starts) being its own frame is compiled as
         # simple or not accordingly; mj_setConst does not revisit that.
-        if old_rows["body_sameframe"] != new_rows["body_sameframe"]:
-            copies_of.pop(key, None)
+        if before["body_sameframe"] != after["body_sameframe"]:
+            del copies_of[key]
             return None
-        writes += _writes_of(model, body, new_rows)
+        writes += _writes_of(model, body, after)
     copies.rows = new
-    copies.inputs = _inputs(model, bodies, sizes)
     return writes
+
+
+def _check(copies: _Copies, model, bodies: list[_Body]) -> bool:
+    """Compiles `copies` with the compiled model's sizes; whether that gives the compiled
+    model's rows (then they are the copy's last)."""
+    rows = copies.compile(bodies, _sizes(model, bodies))
+    if rows is None or not all(
+        _same(_current_rows(model, body), row) for body, row in zip(bodies, rows)
+    ):
+        return False
+    copies.rows = rows
+    return True
+
+
+def _sizes(model, bodies: list[_Body]) -> np.ndarray:
+    """The compiled sizes of the bodies' geoms, in body order (a copy)."""
+    return model.geom_size[[i for body in bodies for i in body.geom_ids]]
 
 
 def _writes_of(model, body: _Body, rows: dict) -> list[FieldWrite]:
@@ -377,12 +420,11 @@ def _alone_ids(bodies: list[_Body]) -> list[int]:
     return ids
 
 
-def _inputs(model, bodies: list[_Body], sizes: list | None = None) -> dict[str, np.ndarray]:
-    """What the copy takes from the compiled model: its geoms' fields (their sizes as
-    `sizes`, when given) and the explicit inertias."""
+def _inputs(model, bodies: list[_Body]) -> dict[str, np.ndarray]:
+    """What the copy takes from the compiled model besides sizes: its geoms' fields, and
+    the inertias of bodies that set theirs."""
     ids = [i for body in bodies for i in body.geom_ids]
     inputs = {name: getattr(model, name)[ids] for name in _GEOM_INPUTS}
-    inputs["geom_size"] = model.geom_size[ids] if sizes is None else np.asarray(sizes)
     explicit = [body.body_id for body in bodies if not body.inertia_from_geoms]
     inputs.update({name: getattr(model, name)[explicit] for name in _INERTIA_FIELDS})
     return inputs
