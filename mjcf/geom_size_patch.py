@@ -131,11 +131,20 @@ def size_writes(physics, geoms: list) -> list[FieldWrite] | None:
     return writes + body_writes
 
 
+# Per Physics, what was looked up in its compiled model by element: geom ids, and bodies
+# (by element and settings). A Physics' structure never changes (a patch is only tried on
+# the structure it was compiled from), so neither do they.
+_LOOKUPS: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
+
+
 def _geom_id(physics, geom) -> int | None:
-    try:
-        return binding.object_id(physics._layout, physics._mjcf_model, geom)
-    except ValueError:
-        return None
+    lookups = _LOOKUPS.setdefault(physics, {})
+    if geom not in lookups:
+        try:
+            lookups[geom] = binding.object_id(physics._layout, physics._mjcf_model, geom)
+        except ValueError:
+            lookups[geom] = None
+    return lookups[geom]
 
 
 def _compiled_size(geom) -> np.ndarray | None:
@@ -245,6 +254,14 @@ def _true(value) -> bool:
 def _body(physics, element, body_id: int, settings: _Settings) -> _Body | None:
     """The body `body_id` as `element`'s geom children, or None when its compiled geoms
     are not exactly those, or one of them is not a primitive."""
+    lookups = _LOOKUPS.setdefault(physics, {})
+    key = (element, settings)
+    if key not in lookups:
+        lookups[key] = _look_up_body(physics, element, body_id, settings)
+    return lookups[key]
+
+
+def _look_up_body(physics, element, body_id: int, settings: _Settings) -> _Body | None:
     model = physics.model.ptr
     geoms = element.get_children("geom")
     ids = [_geom_id(physics, geom) for geom in geoms]
