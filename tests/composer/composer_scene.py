@@ -132,3 +132,17 @@ class Diverges(ReachTask):
         self.steps += 1
         if self.steps == self.diverge_at:
             physics.bind(self.box.root_body).mass = np.nan
+
+
+def play_episodes(env, episodes: int, steps: int, seed: int = 7) -> list:
+    """The first observation of each of `episodes` episodes of `env`, then (reward,
+    observation) of each of its `steps` steps under seeded random actions (two controls,
+    as `ReachTask`'s arm has)."""
+    actions = np.random.RandomState(seed).uniform(-1, 1, size=(steps, 2))
+    values = []
+    for _ in range(episodes):
+        values.append(env.reset().observation)
+        for action in actions:
+            timestep = env.step(action)
+            values.append((timestep.reward, timestep.observation))
+    return values

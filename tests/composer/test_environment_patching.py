@@ -2,7 +2,7 @@
 
 import numpy as np
 import pytest
-from composer_scene import ReachTask
+from composer_scene import ReachTask, play_episodes
 
 import composer
 import mjcf
@@ -30,19 +30,6 @@ class VariedTask(ReachTask):
         random_state.uniform()
 
 
-def _episodes(env, episodes: int, steps: int = 10) -> list:
-    """The observations and rewards of `episodes` episodes under seeded random actions."""
-    actions = np.random.RandomState(7).uniform(-1, 1, size=(steps, 2))
-    values = []
-    for _ in range(episodes):
-        timestep = env.reset()
-        values.append(timestep.observation)
-        for action in actions:
-            timestep = env.step(action)
-            values.append((timestep.reward, timestep.observation))
-    return values
-
-
 def _count_compiles(monkeypatch) -> list:
     calls = []
     original = environment.compile_mjcf_model
@@ -58,7 +45,7 @@ def _count_compiles(monkeypatch) -> list:
 def test_twenty_seeded_episodes_are_bit_identical_with_patching_on_and_off():
     patched_env = composer.Environment(VariedTask(), random_state=3)
     compiled_env = composer.Environment(VariedTask(), random_state=3, patch_compiled_model=False)
-    patched, compiled = _episodes(patched_env, 20), _episodes(compiled_env, 20)
+    patched, compiled = play_episodes(patched_env, 20, 10), play_episodes(compiled_env, 20, 10)
     assert len(patched) == len(compiled) == 20 * 11
     for first, second in zip(patched, compiled):
         if isinstance(first, tuple):
@@ -160,7 +147,7 @@ def test_a_default_class_cylinder_radius_drawn_every_episode_patches_bit_identic
 ):
     patched_env = composer.Environment(BrickTask(), random_state=5)
     compiled_env = composer.Environment(BrickTask(), random_state=5, patch_compiled_model=False)
-    patched, compiled = _episodes(patched_env, 20), _episodes(compiled_env, 20)
+    patched, compiled = play_episodes(patched_env, 20, 10), play_episodes(compiled_env, 20, 10)
     for first, second in zip(patched, compiled, strict=True):
         if isinstance(first, tuple):
             assert first[0] == second[0]

@@ -1,9 +1,8 @@
 """composer.Environment resets that copy the data of the last reset instead of recomputing it."""
 
 import mujoco
-import numpy as np
 import pytest
-from composer_scene import ReachTask
+from composer_scene import ReachTask, play_episodes
 
 import composer
 from mujoco_physics import engine
@@ -53,18 +52,6 @@ class RecordingTask(ReachTask):
         super().initialize_episode(physics, random_state)
 
 
-def _play(env, episodes: int = 6, steps: int = 5) -> list:
-    """The observations and rewards of `episodes` seeded episodes."""
-    actions = np.random.RandomState(1).uniform(-1, 1, size=(steps, 2))
-    values = []
-    for _ in range(episodes):
-        values.append(env.reset().observation)
-        for action in actions:
-            timestep = env.step(action)
-            values.append((timestep.reward, timestep.observation))
-    return values
-
-
 def _count_physics_resets(monkeypatch) -> list:
     calls = []
     original = engine.Physics.reset
@@ -84,7 +71,8 @@ def test_resets_read_and_play_as_resets_that_recompile(vary_contacts):
     compiled = composer.Environment(
         RecordingTask(vary_contacts), random_state=5, patch_compiled_model=False
     )
-    reused_values, compiled_values = _play(reused), _play(compiled)
+    reused_values = play_episodes(reused, 6, 5, seed=1)
+    compiled_values = play_episodes(compiled, 6, 5, seed=1)
     assert reused.task.records == reused.task.fresh_records == compiled.task.records
     # The contact softness reaches what the reset computed: the records tell episodes apart.
     assert (len({r["qacc"] for r in reused.task.records}) > 1) == vary_contacts
@@ -130,9 +118,9 @@ def test_an_after_compile_hook_makes_every_reset_start_afresh(monkeypatch):
     compiled = composer.Environment(
         SoftensAfterCompile(vary_contacts=False), random_state=5, patch_compiled_model=False
     )
-    _play(compiled)
+    play_episodes(compiled, 6, 5, seed=1)
     resets = _count_physics_resets(monkeypatch)
-    _play(env)
+    play_episodes(env, 6, 5, seed=1)
     # Per episode: the reset context the hooks run in (as in dm_control), and the episode's.
     assert len(resets) == 2 * 6
     assert env.task.records == env.task.fresh_records == compiled.task.records
@@ -153,6 +141,6 @@ def test_without_recompiling_every_episode_resets_see_the_last_episodes_writes()
         random_state=5,
         recompile_mjcf_every_episode=False,
     )
-    _play(env)
+    play_episodes(env, 6, 5, seed=1)
     assert env.task.records == env.task.fresh_records
     assert len({record["qacc"] for record in env.task.records}) == 6
