@@ -5,15 +5,17 @@ Besides `geom_size`, a geom's size feeds its bounding radius and box (`geom_rbou
 `body_bvhadr`/`body_bvhnum` rows) and, when the body's inertia comes from its geoms, the
 body's mass, inertia and inertial frame (`body_mass`, `body_inertia`, `body_ipos`,
 `body_iquat`). Nothing of that is computed here: MuJoCo's compiler computes it, on a model
-of one body holding copies of the body's geoms (their compiled type, size, frame, group,
+holding copies of the changed bodies' geoms (their compiled type, size, frame, group,
 contact bits and margin, their MJCF mass, density and `shellinertia`) under the same
-`<compiler>` inertia settings. That model is compiled twice: with the sizes the compiled
-model holds, where it must reproduce the compiled model's values bit for bit (otherwise
-some input is not what the compiler saw, and the patch declines), and with the new sizes,
-which gives the values to write. What follows from those (subtree masses, inverse weights,
-`stat`, ...) is left to `mj_setConst`, which the patch table requires after a size write.
-That the result equals a recompile is proven by `tools/patch_proof.py`, like every pair of
-the table.
+`<compiler>` inertia settings, compiled with the new sizes. The copies (an `MjSpec`) are
+built once per MJCF model and checked: compiled with the sizes the compiled model holds,
+they must reproduce its values bit for bit (otherwise some input is not what the compiler
+saw, and the patch declines). They are checked again wherever the compiled model no
+longer holds what they last gave (it was recompiled in between), and built anew when that
+fails. What follows from the written values (subtree masses, inverse weights, ...) is
+left to `mj_setConst`, which the patch table requires after a size write, and the model
+statistics to `mjcf.model_statistics`. That the result equals a recompile is proven by
+`tools/patch_proof.py`, like every pair of the table.
 
 Declined (the caller recompiles): geoms other than sphere, capsule, ellipsoid, cylinder and
 box, in the changed geom's body too; geoms given by `fromto` (the compiled size is not the
@@ -21,8 +23,7 @@ attribute); geoms with fluid interaction (`fluidshape`); bodies whose geoms are 
 children of the one MJCF element (`<frame>`s, attached models); models with a joint
 whose stiffness and damping come from `springdamper` (converted with the inertia it
 moves); models with flexes; `settotalmass` and `alignfree`, which make one body's inertia
-depend on the others or move its frame. The statistics (`stat`) that sizes move are
-`mjcf.model_statistics`'s.
+depend on the others or move its frame.
 """
 
 from __future__ import annotations
