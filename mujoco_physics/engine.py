@@ -332,7 +332,16 @@ class Physics:
 
     def copy_data_from(self, data: mujoco.MjData) -> None:
         """Copies `data`, an MjData of this Physics' model, into this Physics' data in place
-        (`mj_copyData`); its derived quantities are taken as up to date."""
+        (`mj_copyData`); its derived quantities are taken as up to date.
+
+        Raises:
+          NotImplementedError: with mujoco bindings that have no `mj_copyData` (3.3).
+        """
+        if not hasattr(mujoco, "mj_copyData"):
+            raise NotImplementedError(
+                f"copy_data_from needs mujoco.mj_copyData, which mujoco {mujoco.__version__}'s "
+                "bindings do not have"
+            )
         sim = self._sim
         mujoco.mj_copyData(sim.data, sim.model, data)
         sim.dirty = False

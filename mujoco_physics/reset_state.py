@@ -19,6 +19,9 @@ from mujoco_physics.engine import Physics
 
 __all__ = ["ResetState"]
 
+# Bindings without mj_copyData (mujoco 3.3) cannot copy one MjData into another: every
+# reset is computed there.
+_CAN_COPY = hasattr(mujoco, "mj_copyData")
 # MuJoCo's global callbacks, found in the installed bindings by their getters' names.
 _CALLBACK_GETTERS = tuple(
     getattr(mujoco, name) for name in sorted(dir(mujoco)) if name.startswith("get_mjcb_")
@@ -29,6 +32,13 @@ def _outside_code_takes_part(model: mujoco.MjModel) -> bool:
     return bool(model.nplugin) or any(get() is not None for get in _CALLBACK_GETTERS)
 
 
+def _may_keep(model: mujoco.MjModel, data: mujoco.MjData) -> bool:
+    """Whether what a reset left in `data` may be copied back later: the bindings can copy,
+    no code outside the model took part, and the forward did not warn (resetting again
+    must warn, or raise, again)."""
+    return _CAN_COPY and not _outside_code_takes_part(model) and not data.warning.number.any()
+
+
 class ResetState:
     """Resets a Physics as `Physics.reset()` does, copying the data of the last reset
     instead of recomputing it while that is exact.
@@ -37,7 +47,8 @@ class ResetState:
     (a recompile) resets afresh. Data is kept from the second reset of a model on, so a
     model that is reset once (a task whose structure changes every episode) costs no
     MjData of its own. A reset whose forward warned keeps nothing, so the next one raises
-    (or logs) the warning again.
+    (or logs) the warning again; with bindings that lack `mj_copyData` (mujoco 3.3)
+    nothing is ever kept.
     """
 
     __slots__ = ("_model", "_data", "_seen")
@@ -64,8 +75,7 @@ class ResetState:
         self._model = None
         physics.reset()
         first_reset, self._seen = self._seen is not model, model
-        # A forward that warned is not kept: resetting again warns (or raises) again.
-        if first_reset or _outside_code_takes_part(model) or physics.data.ptr.warning.number.any():
+        if first_reset or not _may_keep(model, physics.data.ptr):
             return
         if self._data is None or self._data.model is not model:
             self._data = mujoco.MjData(model)

@@ -6,6 +6,10 @@ import pytest
 
 from mjcf import model_statistics
 
+# The statistics are computed for the geom-size patch, in the compiler's order of the
+# MuJoCo release the patch table was proven on.
+pytestmark = pytest.mark.patch_table
+
 _SCENE = """
 <mujoco>
   <worldbody>
