@@ -293,6 +293,7 @@ class Environment(dm_env.Environment):
         self._physics_proxy = None
         self._physics_view = None
         self._snapshot = None
+        self._reset_state = ResetState()  # lets go of the data it kept
 
     def __reduce_ex__(self, protocol):
         raise TypeError(
