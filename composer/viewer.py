@@ -349,7 +349,7 @@ def launch(
     status = ViewerStatus(0, 1, 0, None, 0.0, controls.speed, controls.paused)
     handle = window.handle_for(environment.physics)
     try:
-        deadline = time.perf_counter()
+        deadline = None
         while window.is_running() and (max_steps is None or tally.steps < max_steps):
             stepped = False
             if controls.take_reset() or timestep.last():
@@ -376,6 +376,10 @@ def launch(
             handle.sync()
             if on_refresh is not None:
                 on_refresh(handle, status)
+            if deadline is None:
+                # Paced from the first frame shown: opening the window can take longer than
+                # a step, and the steps after it would rush to catch up.
+                deadline = time.perf_counter()
             period = control_timestep / controls.speed if stepped else _PAUSED_REFRESH
             deadline = _sleep_until(deadline + period)
     finally:
