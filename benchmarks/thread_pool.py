@@ -59,6 +59,14 @@ class _Stepper:
             for data in share:
                 mujoco.mj_step(self.model, data, self.sub_steps)
 
+    def _start_threads(self, arguments) -> None:
+        """Starts a daemon thread running `self._serve(*args)` for each args of `arguments`."""
+        self.threads = [
+            threading.Thread(target=self._serve, args=args, daemon=True) for args in arguments
+        ]
+        for thread in self.threads:
+            thread.start()
+
     def close(self) -> None:
         pass
 
@@ -83,12 +91,7 @@ class _Barrier(_Stepper):
         super().__init__(*args)
         self.begin, self.end = threading.Barrier(self.k), threading.Barrier(self.k)
         self.stopping = False
-        self.threads = [
-            threading.Thread(target=self._serve, args=(share,), daemon=True)
-            for share in self.shares[1:]
-        ]
-        for thread in self.threads:
-            thread.start()
+        self._start_threads((share,) for share in self.shares[1:])
 
     def _serve(self, share) -> None:
         while True:
@@ -117,12 +120,7 @@ class _Events(_Stepper):
         self.starts = [threading.Event() for _ in self.shares[1:]]
         self.dones = [threading.Event() for _ in self.shares[1:]]
         self.stopping = False
-        self.threads = [
-            threading.Thread(target=self._serve, args=args, daemon=True)
-            for args in zip(self.shares[1:], self.starts, self.dones)
-        ]
-        for thread in self.threads:
-            thread.start()
+        self._start_threads(zip(self.shares[1:], self.starts, self.dones))
 
     def _serve(self, share, start, done) -> None:
         while True:
@@ -157,12 +155,7 @@ class _Spin(_Stepper):
         for lock in self.starts + self.dones:
             lock.acquire()
         self.stopping = False
-        self.threads = [
-            threading.Thread(target=self._serve, args=args, daemon=True)
-            for args in zip(self.shares[1:], self.starts, self.dones)
-        ]
-        for thread in self.threads:
-            thread.start()
+        self._start_threads(zip(self.shares[1:], self.starts, self.dones))
 
     def _serve(self, share, start, done) -> None:
         while True:
@@ -196,12 +189,7 @@ class _Queues(_Stepper):
         super().__init__(*args)
         self.inboxes = [queue.SimpleQueue() for _ in self.shares]
         self.finished: queue.SimpleQueue = queue.SimpleQueue()
-        self.threads = [
-            threading.Thread(target=self._serve, args=args, daemon=True)
-            for args in zip(self.shares, self.inboxes)
-        ]
-        for thread in self.threads:
-            thread.start()
+        self._start_threads(zip(self.shares, self.inboxes))
 
     def _serve(self, share, inbox) -> None:
         while inbox.get():
