@@ -146,3 +146,17 @@ def play_episodes(env, episodes: int, steps: int, seed: int = 7) -> list:
             timestep = env.step(action)
             values.append((timestep.reward, timestep.observation))
     return values
+
+
+def assert_same_episodes(first: list, second: list) -> None:
+    """Asserts that two `play_episodes` results are bit-identical: the same rewards, and the
+    same observation names with arrays of the same shape, dtype and bytes."""
+    assert len(first) == len(second)
+    for mine, theirs in zip(first, second):
+        if isinstance(mine, tuple):
+            assert mine[0] == theirs[0]
+            mine, theirs = mine[1], theirs[1]
+        assert list(mine) == list(theirs)
+        for name in mine:
+            a, b = np.asarray(mine[name]), np.asarray(theirs[name])
+            assert (a.shape, a.dtype, a.tobytes()) == (b.shape, b.dtype, b.tobytes()), name

@@ -2,7 +2,7 @@
 
 import numpy as np
 import pytest
-from composer_scene import ReachTask, play_episodes
+from composer_scene import ReachTask, assert_same_episodes, play_episodes
 
 import composer
 import mjcf
@@ -46,14 +46,8 @@ def test_twenty_seeded_episodes_are_bit_identical_with_patching_on_and_off():
     patched_env = composer.Environment(VariedTask(), random_state=3)
     compiled_env = composer.Environment(VariedTask(), random_state=3, patch_compiled_model=False)
     patched, compiled = play_episodes(patched_env, 20, 10), play_episodes(compiled_env, 20, 10)
-    assert len(patched) == len(compiled) == 20 * 11
-    for first, second in zip(patched, compiled):
-        if isinstance(first, tuple):
-            assert first[0] == second[0]
-            first, second = first[1], second[1]
-        assert list(first) == list(second)
-        for name in first:
-            assert first[name].tobytes() == second[name].tobytes(), name
+    assert len(patched) == 20 * 11
+    assert_same_episodes(patched, compiled)
     assert patched_env.task.after_compile_calls == compiled_env.task.after_compile_calls == 21
 
 
@@ -148,12 +142,7 @@ def test_a_default_class_cylinder_radius_drawn_every_episode_patches_bit_identic
     patched_env = composer.Environment(BrickTask(), random_state=5)
     compiled_env = composer.Environment(BrickTask(), random_state=5, patch_compiled_model=False)
     patched, compiled = play_episodes(patched_env, 20, 10), play_episodes(compiled_env, 20, 10)
-    for first, second in zip(patched, compiled, strict=True):
-        if isinstance(first, tuple):
-            assert first[0] == second[0]
-            first, second = first[1], second[1]
-        for name in first:
-            assert first[name].tobytes() == second[name].tobytes(), name
+    assert_same_episodes(patched, compiled)
     assert patched_env._last_model_update is environment._ModelUpdate.PATCHED
     compiles = _count_compiles(monkeypatch)
     for _ in range(3):

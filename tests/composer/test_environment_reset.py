@@ -4,7 +4,7 @@ import logging
 
 import numpy as np
 import pytest
-from composer_scene import ReachTask
+from composer_scene import ReachTask, assert_same_episodes, play_episodes
 
 import composer
 
@@ -67,42 +67,19 @@ class FailsToInitialize(ReachTask):
         super().initialize_episode(physics, random_state)
 
 
-def _trajectory(env, episodes=3, steps=8):
-    """Observations and rewards of `episodes` episodes under a fixed action sequence."""
-    actions = np.random.RandomState(99).uniform(-1, 1, size=(steps, 2))
-    values = []
-    for _ in range(episodes):
-        timestep = env.reset()
-        values.append(dict(timestep.observation))
-        for action in actions:
-            timestep = env.step(action)
-            values.append((timestep.reward, dict(timestep.observation)))
-    return values
-
-
-def _assert_same_trajectory(first, second):
-    assert len(first) == len(second)
-    for a, b in zip(first, second):
-        if isinstance(a, tuple):
-            assert a[0] == b[0]
-            a, b = a[1], b[1]
-        assert list(a) == list(b)
-        for name in a:
-            np.testing.assert_array_equal(a[name], b[name], err_msg=name)
-
-
 def test_reset_without_mjcf_change_matches_a_real_recompile_exactly():
     fast_env = composer.Environment(HeavierEveryStep(), random_state=5)
     recompiling_env = composer.Environment(RecompilingTask(), random_state=5)
-    fast = _trajectory(fast_env)
-    recompiled = _trajectory(recompiling_env)
-    _assert_same_trajectory(fast, recompiled)
+    fast = play_episodes(fast_env, 3, 8, seed=99)
+    recompiled = play_episodes(recompiling_env, 3, 8, seed=99)
+    assert_same_episodes(fast, recompiled)
 
 
 def test_parameter_only_mjcf_change_matches_a_real_recompile_exactly():
     in_place_env = composer.Environment(ResizingTask(), random_state=5)
     recompiling_env = composer.Environment(ResizingRecompilingTask(), random_state=5)
-    _assert_same_trajectory(_trajectory(in_place_env), _trajectory(recompiling_env))
+    in_place = play_episodes(in_place_env, 3, 8, seed=99)
+    assert_same_episodes(in_place, play_episodes(recompiling_env, 3, 8, seed=99))
 
 
 def test_parameter_only_mjcf_change_keeps_the_physics():
@@ -206,9 +183,9 @@ def test_without_recompiling_every_episode_a_late_after_compile_hook_runs_at_fir
 
 def test_fixed_initial_state_starts_every_episode_identically():
     env = composer.Environment(HeavierEveryStep(), random_state=1, fixed_initial_state=True)
-    first = _trajectory(env, episodes=1)
-    second = _trajectory(env, episodes=1)
-    _assert_same_trajectory(first, second)
+    first = play_episodes(env, 1, 8, seed=99)
+    second = play_episodes(env, 1, 8, seed=99)
+    assert_same_episodes(first, second)
 
 
 def test_without_fixed_initial_state_episodes_start_differently():
