@@ -22,8 +22,8 @@ from collections.abc import Iterable
 
 import mujoco
 
-from mjcf.binding import element_namespace
-from mujoco_physics.field_layout import FAMILIES, MODEL_EXTENTS
+from mjcf.binding import compiled_field
+from mujoco_physics.field_layout import MODEL_EXTENTS
 
 _APPEARANCE_PROPERTIES = frozenset(
     (
@@ -70,9 +70,7 @@ def changes_are_forward_neutral(changes: Iterable, neutral_fields: frozenset[str
     """Whether every (element, XML attribute name) change compiles only into a field of
     `neutral_fields`; False for an attribute that is not one MjModel field of its element."""
     for element, xml_name in changes:
-        spec = element.spec.attributes.get(xml_name)
-        family = FAMILIES.get(element_namespace(element) or "")
-        ref = family.fields.get(spec.python_name) if family and spec else None
+        ref = compiled_field(element, xml_name)
         if ref is None or ref.name not in neutral_fields:
             return False
     return True

@@ -485,6 +485,16 @@ def create(sim, layout: ModelLayout, root, elements, single: bool) -> Binding:
     return _binding_class(family)._from_ids(sim, layout, family, ids, False, f"[{label}]")
 
 
+def compiled_field(element, xml_name: str) -> field_layout.FieldRef | None:
+    """The MuJoCo field that `element`'s attribute `xml_name` compiles into (the binding
+    attribute of the same Python name: `rgba` of a geom is `geom_rgba`), or None."""
+    spec = element.spec.attributes.get(xml_name)
+    family = field_layout.FAMILIES.get(element_namespace(element) or "")
+    if spec is None or family is None:
+        return None
+    return family.fields.get(spec.python_name)
+
+
 def object_id(layout: ModelLayout, root, element) -> int:
     """The id of `element`'s compiled object in the model `layout` describes, compiled from
     `root`: what `create(...).element_id` gives, without making a binding.

@@ -27,15 +27,14 @@ import numpy as np
 
 from mjcf import (
     attribute_types,
-    constants,
+    binding,
     geom_size_patch,
     model_statistics,
     patchable_attributes,
     traversal_utils,
 )
-from mjcf.binding import element_namespace
 from mjcf.element import Element
-from mujoco_physics.field_layout import FAMILIES, MODEL, ModelLayout
+from mujoco_physics.field_layout import MODEL, ModelLayout
 
 __all__ = ["patch_supported", "patch_model"]
 
@@ -76,7 +75,7 @@ def patch_model(physics, layout: ModelLayout, changes, *, proven: dict | None = 
     sized_geoms = {}
     set_const = False
     for element, xml_name in changes:
-        if _in_defaults(element):
+        if traversal_utils.is_default_template(element):
             targets = _elements_using(element, xml_name)
         else:
             targets = (element,)
@@ -117,11 +116,6 @@ def patch_model(physics, layout: ModelLayout, changes, *, proven: dict | None = 
     return True
 
 
-def _in_defaults(element) -> bool:
-    parent = element._parent
-    return parent is not None and parent._spec.name == constants.DEFAULT
-
-
 def _elements_using(template, xml_name: str) -> list:
     """Elements of `template`'s tag that have attribute `xml_name`, in its model, whose
     default classes include the template's class."""
@@ -132,7 +126,7 @@ def _elements_using(template, xml_name: str) -> list:
         for element in template._root._iter_own_tree()
         if element._spec.name == tag
         and xml_name in element._spec.attributes
-        and not _in_defaults(element)
+        and not traversal_utils.is_default_template(element)
         and dclass in traversal_utils.default_classes(element)
     ]
 
@@ -142,15 +136,13 @@ def _write_for(physics, layout: ModelLayout, element, xml_name: str) -> _Write |
     source = traversal_utils.default_value_source(element, xml_name)
     if source is None:
         return None
-    spec = element._spec.attributes[xml_name]
-    if spec.type.kind != attribute_types.OTHER:
+    if element._spec.attributes[xml_name].type.kind != attribute_types.OTHER:
         return None
-    family = FAMILIES.get(element_namespace(element) or "")
-    ref = family.fields.get(spec.python_name) if family is not None else None
+    ref = binding.compiled_field(element, xml_name)
     if ref is None or ref.struct != MODEL:
         return None
     try:
-        object_id = physics.bind(element).element_id
+        object_id = binding.object_id(layout, physics._mjcf_model, element)
     except ValueError:
         return None
     array = getattr(physics.model.ptr, ref.name)

@@ -137,6 +137,12 @@ def _actuator_default_tags() -> tuple[str, ...]:
     return tuple(tag for tag in root.children[constants.ACTUATOR].children if tag in in_defaults)
 
 
+def is_default_template(element: Element) -> bool:
+    """Whether `element` is a template of a default class (a child of a `<default>`)."""
+    parent = element._parent
+    return parent is not None and parent._spec.name == constants.DEFAULT
+
+
 def default_value_source(element: Element, xml_name: str) -> Element | None:
     """The element whose value of attribute `xml_name` compiles into `element`.
 

@@ -265,11 +265,6 @@ def _all_elements(root) -> list[Element]:
     return found
 
 
-def _in_defaults(element) -> bool:
-    parent = element._parent
-    return parent is not None and parent._spec.name == "default"
-
-
 # The kinds of change the proof makes of each pair, where the model allows.
 _ON_ELEMENT = "a value the element or its default classes set"
 _ON_TEMPLATE = "a default-class template"
@@ -285,7 +280,7 @@ def _variety(element, pair) -> tuple:
     """
     if pair != ("geom", "size"):
         return ()
-    if _in_defaults(element):
+    if traversal_utils.is_default_template(element):
         return (id(element),)
     body = element._parent
     type_source = traversal_utils.default_value_source(element, "type")
@@ -306,7 +301,7 @@ def _sites(root, candidates) -> dict:
             # Attachment frames and model roots are never patched (see mjcf.model_patch).
             continue
         tag = element._spec.name
-        in_defaults = _in_defaults(element)
+        in_defaults = traversal_utils.is_default_template(element)
         for name in element._spec.attributes:
             if (tag, name) not in candidates:
                 continue
@@ -403,7 +398,7 @@ def _differences(patched: mujoco.MjModel, compiled: mujoco.MjModel) -> list[str]
 def _prove_change(root, base, element, pair, record: _Record) -> None:
     """Changes `pair` on `element`, compares the patched and the compiled models, undoes it."""
     name = pair[1]
-    if _in_defaults(element):
+    if traversal_utils.is_default_template(element):
         current = element._attributes[name]
     else:
         current = _current_value(root, base, element, name)
