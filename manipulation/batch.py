@@ -7,6 +7,8 @@ tasks: the initial states come from the CPU task's own initializers (see
 Needs the extra `[warp]` to build an environment; importing this module does not import Warp.
 """
 
+import functools
+
 import numpy as np
 
 from composer import batch
@@ -30,17 +32,14 @@ class BatchReach(batch.BatchTask):
     batched_model_fields = ("site_pos",)
 
     def after_compile(self, physics) -> None:
-        super().after_compile(physics)
         self._pinch = physics.bind(self.task.hand.tool_center_point)
         self._target = physics.bind(self.task.target)
 
-    def get_reward(self, physics) -> np.ndarray:
-        distance = np.linalg.norm(self._pinch.xpos - self._target.xpos, axis=-1)
+    def get_reward(self, physics):
+        xp = physics.xp
+        distance = xp.linalg.vector_norm(self._pinch.xpos - self._target.xpos, axis=-1)
         return rewards.tolerance(
-            distance.astype(np.float64),
-            bounds=(0.0, tc.REACH_RADIUS),
-            margin=tc.REACH_MARGIN,
-            sigmoid="gaussian",
+            distance, bounds=(0.0, tc.REACH_RADIUS), margin=tc.REACH_MARGIN, sigmoid="gaussian"
         )
 
 
@@ -49,37 +48,26 @@ class BatchLift(batch.BatchTask):
     `lift_height`, while the hand touches the prop; 0 otherwise."""
 
     def after_compile(self, physics) -> None:
-        super().after_compile(physics)
         task = self.task
         self._vertices = physics.bind(task.prop.vertices)
-        # 1 for the hand's geoms, 2 for the prop's: a hand-prop contact multiplies to 2.
-        codes = np.zeros(physics.mj_model.ngeom, dtype=np.int8)
-        codes[base.entity_geom_mask(physics.host, task.prop)] = 2
-        codes[base.entity_geom_mask(physics.host, task.hand)] = 1
-        self._geom_codes = codes
+        self._touches = physics.contact_watch(
+            base.entity_geom_mask(physics.host, task.hand),
+            base.entity_geom_mask(physics.host, task.prop),
+        )
 
-    def _hand_touches(self, physics) -> np.ndarray:
-        contacts = physics.contacts()
-        pair_codes = self._geom_codes[contacts.geom]
-        touching = pair_codes[:, 0] * pair_codes[:, 1] == 2
-        touches = np.zeros(physics.num_envs, dtype=bool)
-        touches[contacts.worldid[touching]] = True
-        return touches
-
-    def get_reward(self, physics) -> np.ndarray:
-        height = self._vertices.xpos[:, :, 2].min(axis=1).astype(np.float64)
+    def get_reward(self, physics):
+        xp = physics.xp
+        height = xp.min(self._vertices.xpos[:, :, 2], axis=1)
         lift_height = self.task.lift_height
         progress = rewards.tolerance(
             height,
-            bounds=(lift_height, np.inf),
+            bounds=(lift_height, float("inf")),
             margin=lift_height,
             sigmoid="linear",
             value_at_margin=0.0,
         )
-        earns = (height > 0.0) & (progress > 0.0)
-        if not earns.any():
-            return np.zeros(physics.num_envs)
-        return np.where(earns & self._hand_touches(physics), progress, 0.0)
+        earns = (height > 0.0) & (progress > 0.0) & self._touches()
+        return xp.where(earns, progress, xp.zeros_like(progress))
 
 
 batch.register(Reach, BatchReach)
@@ -89,14 +77,17 @@ batch.register(Lift, BatchLift)
 @batch.batch_reader.register
 def _joint_angles(observable: _JointAngleSinCos, physics):
     joints = physics.bind(list(observable._joints))
-    return lambda: np.stack([np.sin(q := joints.qpos), np.cos(q)], axis=-1)
+    xp = physics.xp
+    return lambda: xp.stack([xp.sin(q := joints.qpos), xp.cos(q)], axis=-1)
 
 
 @batch.batch_reader.register
 def _joint_torques(observable: _JointTorques, physics):
     sensors = physics.bind(list(observable._sensors))
     axes = np.asarray(physics.host.bind(list(observable._joints)).axis, dtype=np.float32)
-    return lambda: np.einsum("wjk,jk->wj", sensors.sensordata.reshape(-1, *axes.shape), axes)
+    device_axes = physics.arrays.asarray(axes)
+    xp = physics.xp
+    return lambda: xp.sum(xp.reshape(sensors.sensordata, (-1, *axes.shape)) * device_axes, axis=-1)
 
 
 #: The environment names with a batched version.
@@ -107,11 +98,12 @@ def load(environment_name: str, num_envs: int, *, seed=None, **kwargs) -> batch.
     """Returns `num_envs` worlds of the manipulation task `environment_name`, batched.
 
     Args:
-      environment_name: one of `BATCHED` ('reach_site_features', 'lift_brick_features').
+      environment_name: one of `BATCHED`.
       num_envs: the number of worlds.
       seed: an int, a `np.random.RandomState` or None; seeds each world's generator.
       **kwargs: passed to `composer.batch.BatchEnvironment` (`device`, `random_states`,
-        `time_limit`: the CPU task's 10 s unless given, ...).
+        `array_type`, `autoreset_mode`, `state_workers`, `time_limit`: the CPU task's
+        10 s unless given, ...). Initial-state producers build their tasks by name.
 
     Raises:
       ValueError: if the name is not one of `BATCHED`.
@@ -123,6 +115,7 @@ def load(environment_name: str, num_envs: int, *, seed=None, **kwargs) -> batch.
         )
     task = registry.build_task(environment_name)
     kwargs.setdefault("time_limit", tc.TIME_LIMIT)
+    kwargs.setdefault("task_factory", functools.partial(registry.build_task, environment_name))
     return batch.BatchEnvironment(task, num_envs, random_state=seed, **kwargs)
 
 
@@ -130,19 +123,13 @@ def make_vector_env(
     environment_name: str, num_envs: int, device: str | None, autoreset_mode, **kwargs
 ):
     """`load(...)` as a `composer.batch.gym.WarpVectorEnv` (`gymnasium.make_vec`'s backend
-    'warp'); imports gymnasium.
+    'warp', with Gymnasium's NEXT_STEP or SAME_STEP autoreset); imports gymnasium.
 
     Raises:
-      ValueError: for an autoreset mode other than NEXT_STEP.
+      ValueError: for Gymnasium's DISABLED autoreset mode.
     """
-    from gymnasium.vector import AutoresetMode
+    from composer.batch.gym import WarpVectorEnv, autoreset_mode_name
 
-    from composer.batch.gym import WarpVectorEnv
-
-    if AutoresetMode(autoreset_mode) is not AutoresetMode.NEXT_STEP:
-        raise ValueError(
-            f"autoreset_mode: backend 'warp' resets worlds at the next step (NEXT_STEP), got "
-            f"{autoreset_mode!r}"
-        )
-    env = load(environment_name, num_envs, device="cpu" if device is None else device, **kwargs)
+    mode = autoreset_mode_name(autoreset_mode)
+    env = load(environment_name, num_envs, device=device, autoreset_mode=mode, **kwargs)
     return WarpVectorEnv(env)

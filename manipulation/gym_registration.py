@@ -76,8 +76,9 @@ def make_vector_env(
         `RayVectorEnv` (takes `address`, `envs_per_actor`, `num_cpus_per_actor`,
         `max_restarts`, `start_timeout`, `call_timeout`, defaults as there; needs the
         extra `[ray]`).
-        "warp" for a `WarpVectorEnv`: all worlds on one MuJoCo Warp `device` ("cpu" by
-        default, or "cuda:0"); kwargs go to `composer.batch.BatchEnvironment`.
+        "warp" for a `WarpVectorEnv`: all worlds on one MuJoCo Warp `device` (by default
+        CUDA when Warp sees a GPU, else "cpu"); kwargs go to
+        `composer.batch.BatchEnvironment`.
       autoreset_mode, copy: passed to either.
       **kwargs: passed to each sub-environment's `GymnasiumEnv`.
 

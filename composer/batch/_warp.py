@@ -49,3 +49,23 @@ def is_available() -> bool:
     import importlib.util
 
     return all(importlib.util.find_spec(name) is not None for name in ("mujoco_warp", "warp"))
+
+
+def default_device() -> str:
+    """'cuda:0' when Warp sees a CUDA device, else 'cpu', with a one-line warning that says so.
+
+    Returns:
+      A Warp device name.
+    """
+    import warnings
+
+    warp = load()[0]
+    if warp.get_cuda_device_count() > 0:
+        return "cuda:0"
+    warnings.warn(
+        "composer.batch: Warp sees no CUDA device; the batch runs on Warp's CPU device "
+        "(pass device='cpu' to say so and silence this)",
+        RuntimeWarning,
+        stacklevel=3,
+    )
+    return "cpu"

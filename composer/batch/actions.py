@@ -1,8 +1,10 @@
 """A batch's actions: checked once per step, on the host or on the device where they live.
 
-NumPy arrays, lists and other host values are checked with NumPy. Warp, torch and JAX arrays
-stay where they are: their shape and dtype are checked from their metadata, their values by
-one kernel that counts NaN and infinite entries (one integer comes back to the host).
+NumPy arrays, lists and other host values are checked with NumPy and copied to the device
+once. Warp, torch and JAX arrays stay where they are: their shape, dtype and device are
+checked from their metadata. Their values are checked for NaN and infinity by one kernel
+that counts them, whose one integer comes back to the host; on CUDA that read would
+synchronise every step, so there it runs only with `check_values=True`.
 """
 
 from typing import Any
@@ -10,27 +12,38 @@ from typing import Any
 import numpy as np
 
 from composer.batch import _warp, kernels
-from composer.batch.outputs import DeviceOutputs, array_library
+from composer.batch.arrays import ArrayBridge, array_library
 
 __all__ = ["check_action"]
 
 
-def check_action(action, expected: tuple[int, ...], outputs: DeviceOutputs) -> Any:
-    """Returns `action` checked: a float64 NumPy array, or for device arrays a Warp array.
+def check_action(
+    action, expected: tuple[int, ...], arrays: ArrayBridge, *, check_values: bool
+) -> Any:
+    """Returns `action` checked, as a float32 array of the batch's namespace on its device.
 
-    A device action comes back as a 2-D (num_envs, entries per world) Warp array on the
-    batch's device, sharing the caller's memory.
+    Args:
+      action: a NumPy array (or anything NumPy reads), or a Warp, torch or JAX array.
+      expected: the shape, (num_envs, *action shape).
+      arrays: the batch's `ArrayBridge`.
+      check_values: whether to check device arrays for NaN and infinity.
 
     Raises:
       ValueError: naming `action`, for a value that is not a float array of shape
         `expected`, a device array on another device, or NaN or infinite entries (the
         message lists the worlds that have them).
     """
-    if not array_library(action):
-        return _check_host_action(action, expected)
+    library = array_library(action)
+    if not library:
+        return arrays.asarray(_check_host_action(action, expected), np.float32)
     wp = _warp.load()[0]
     try:
-        array = outputs.to_device(action)
+        if library == "torch":
+            array = wp.from_torch(action)
+        elif library == "jax":
+            array = wp.from_jax(action)
+        else:
+            array = action
     except (TypeError, ValueError, RuntimeError) as error:
         raise ValueError(f"action: could not read {type(action).__name__} ({error})") from error
     if tuple(array.shape) != expected:
@@ -38,26 +51,26 @@ def check_action(action, expected: tuple[int, ...], outputs: DeviceOutputs) -> A
             f"action: expected shape {expected} (num_envs, *action_spec().shape), "
             f"got {tuple(array.shape)}"
         )
-    if array.device != outputs.device:
-        raise ValueError(
-            f"action: expected an array on {outputs.device}, got one on {array.device}"
-        )
+    if array.device != arrays.device:
+        raise ValueError(f"action: expected an array on {arrays.device}, got one on {array.device}")
     if array.dtype not in (wp.float32, wp.float64) or not array.is_contiguous:
         raise ValueError(
             f"action: expected a contiguous float32 or float64 array, got {array.dtype.__name__}"
             f"{'' if array.is_contiguous else ' (not contiguous)'}"
         )
     rows = array.reshape((expected[0], -1))
-    count = wp.zeros(1, dtype=wp.int32, device=outputs.device)
-    wp.launch(
-        kernels.kernels().count_nonfinite,
-        dim=rows.shape,
-        inputs=[rows, count],
-        device=outputs.device,
-    )
-    if count.numpy()[0]:
-        _raise_nonfinite(rows.numpy())
-    return rows
+    if check_values:
+        count = wp.zeros(1, dtype=wp.int32, device=arrays.device)
+        wp.launch(
+            kernels.kernels().count_nonfinite,
+            dim=rows.shape,
+            inputs=[rows, count],
+            device=arrays.device,
+        )
+        if count.numpy()[0]:
+            _raise_nonfinite(rows.numpy())
+    xp = arrays.xp
+    return xp.astype(arrays.view(array, expected), xp.float32)
 
 
 def _check_host_action(action, expected: tuple[int, ...]) -> np.ndarray:

@@ -2,7 +2,7 @@
 
 import math
 import numbers
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from typing import Any, NamedTuple
 
 import dm_env
@@ -11,14 +11,22 @@ from dm_env import specs
 
 import composer
 import mjcf
-from composer.batch import _warp, actions, kernels, outputs
+from composer.batch import _warp, actions, arrays
+from composer.batch.initial_states import StateMaker, StateProducer
 from composer.batch.observables import BatchObservables
 from composer.batch.physics import BatchPhysics
-from composer.batch.task import BatchTask, for_task
+from composer.batch.state_slots import InitialStateStats, StateSlots
+from composer.batch.task import BatchTask, for_task, has_array_initializer
 from composer.hooks import EnvironmentHooks
 from composer.utils import argument_checks
 
-__all__ = ["BatchEnvironment", "BatchTimeStep", "EpisodeEnds"]
+__all__ = ["AUTORESET_MODES", "BatchEnvironment", "BatchTimeStep", "EpisodeEnds"]
+
+#: The values of `BatchEnvironment(autoreset_mode=...)`, as Gymnasium names its modes.
+AUTORESET_MODES = ("next_step", "same_step")
+
+# A step count no episode reaches: the limit of an infinite time limit (int32 counters).
+_NO_LIMIT = 2**31 - 1
 
 _FIRST, _MID, _LAST = (
     int(t) for t in (dm_env.StepType.FIRST, dm_env.StepType.MID, dm_env.StepType.LAST)
@@ -29,13 +37,13 @@ class BatchTimeStep(NamedTuple):
     """What `BatchEnvironment.reset` and `step` return, one row per world.
 
     The arrays are of the environment's `array_type` (NumPy by default; see
-    `composer.batch.outputs`).
+    `composer.batch.arrays`), computed on the batch's device in float32.
 
     Attributes:
       step_type: int8 (num_envs,), `dm_env.StepType` values: FIRST for a world whose
         episode starts, MID, or LAST for one whose episode ended at this step.
-      reward: float64 (num_envs,); 0 for a FIRST world.
-      discount: float64 (num_envs,); 1 for a FIRST world.
+      reward: float32 (num_envs,); 0 for a FIRST world.
+      discount: float32 (num_envs,); 1 for a FIRST world.
       observation: dict of float32 arrays (num_envs, *the CPU environment's observation
         shape).
     """
@@ -60,11 +68,11 @@ class BatchTimeStep(NamedTuple):
 
 def _step_types(step_type):
     # A Warp array has no elementwise comparison; its values come to the host to compare.
-    return step_type.numpy() if outputs.array_library(step_type) == "warp" else step_type
+    return step_type.numpy() if arrays.array_library(step_type) == "warp" else step_type
 
 
 class EpisodeEnds(NamedTuple):
-    """How the episodes that ended at the last step ended, as host arrays (num_envs,) bool.
+    """How the episodes that ended at the last step ended, bool (num_envs,) device arrays.
 
     Attributes:
       terminated: the task ended the episode (discount 0), Gymnasium's `terminated`.
@@ -72,8 +80,8 @@ class EpisodeEnds(NamedTuple):
         `truncated`.
     """
 
-    terminated: np.ndarray
-    truncated: np.ndarray
+    terminated: Any
+    truncated: Any
 
 
 def _random_states(num_envs: int, random_state, random_states) -> list[np.random.RandomState]:
@@ -92,14 +100,14 @@ def _random_states(num_envs: int, random_state, random_states) -> list[np.random
     return [np.random.RandomState(seed) for seed in seeds]
 
 
-def _control_step_limit(time_limit: float, physics_timestep: float, n_sub_steps: int) -> float:
+def _control_step_limit(time_limit: float, physics_timestep: float, n_sub_steps: int) -> int:
     """The number of control steps after which C MuJoCo's float64 `time` reaches the limit.
 
     The time is accumulated as MuJoCo does (one addition per physics step), so a world
     ends at the same step as the CPU environment, whatever float32's `time` on the device.
     """
     if math.isinf(time_limit):
-        return math.inf
+        return _NO_LIMIT
     time, steps = 0.0, 0
     while time < time_limit:
         for _ in range(n_sub_steps):
@@ -113,14 +121,25 @@ class BatchEnvironment:
 
     The task's MJCF is compiled once through `mjcf` (the host `mjcf.Physics`, on which the
     `after_compile` hooks run once), then put on `device` with `num_envs` worlds. Each world
-    is an episode of its own, with its own random generator, step count and time limit;
-    a world whose episode ended is reset on its own at the next `step`, as
-    `composer.Environment` does (the batch's action for it is ignored).
+    is an episode of its own, with its own random generator, step count and time limit.
+    Everything per world lives on the device: the physics, the step counters, the rewards,
+    discounts and step types (the `BatchTask`'s array code), and the episode ends. A step
+    launches work and copies nothing back to the host (see `composer.batch.state_slots`
+    for the one read every `refill_interval` steps).
+
+    Autoreset, as Gymnasium names it:
+    - "next_step" (composer's own): a world whose episode ended is reset at the next
+      `step`, which ignores its action and returns FIRST with reward 0 and discount 1.
+    - "same_step" (rsl_rl's and mjlab's): a world whose episode ends is reset within the
+      same `step`, which returns LAST with the reward and discount of the ended episode and
+      the first observation of the next one; the last observation of the ended episode is
+      `final_observation`.
 
     Args:
       task: a `composer.Task` with a registered batched version, or a `BatchTask`.
       num_envs: the number of worlds.
-      device: the Warp device: "cpu" or "cuda:0" (CUDA graph capture of the physics step).
+      device: the Warp device: "cpu" or "cuda:0"; None picks CUDA when Warp sees a GPU,
+        else the CPU device with a warning.
       time_limit: seconds of simulated time after which a world's episode ends (LAST).
       random_state: an int seed or `np.random.RandomState` from which each world's random
         generator is seeded (ignored when `random_states` is given).
@@ -130,9 +149,17 @@ class BatchEnvironment:
       batched_model_fields: MjModel fields to give one row per world, in addition to the
         task's own (see `BatchPhysics`).
       nconmax, njmax: per-world contact and constraint capacity for MuJoCo Warp.
-      array_type: what `reset` and `step` hand out: "numpy" (host arrays), or "warp",
-        "torch" or "jax": arrays on `device`, without copies (see `composer.batch.outputs`).
-        Actions may be NumPy, Warp, torch or JAX arrays whatever the array type.
+      array_type: what `reset` and `step` hand out: "numpy", "warp", "torch" or "jax" (see
+        `composer.batch.arrays`). Actions may be NumPy, Warp, torch or JAX arrays whatever
+        the array type.
+      autoreset_mode: "next_step" or "same_step" (above).
+      task_factory: a picklable callable returning a new CPU task like `task`, with which
+        each initial-state producer builds its own task (needed for more than one).
+      state_workers: the number of initial-state producers.
+      state_processes: run the producers in processes instead of threads.
+      slots_per_world, refill_interval: see `composer.batch.state_slots`.
+      check_action_values: check device actions for NaN and infinity (one integer read
+        per step); default: on Warp's CPU device only, where the read costs no copy.
 
     Raises:
       ValueError: for a bad argument, named in the message.
@@ -148,7 +175,7 @@ class BatchEnvironment:
         task: composer.Task | BatchTask,
         num_envs: int,
         *,
-        device: str = "cpu",
+        device: str | None = None,
         time_limit: float = float("inf"),
         random_state: int | np.random.RandomState | None = None,
         random_states: Sequence[int | np.random.RandomState] | None = None,
@@ -158,15 +185,32 @@ class BatchEnvironment:
         nconmax: int | None = None,
         njmax: int | None = None,
         array_type: str = "numpy",
+        autoreset_mode: str = "next_step",
+        task_factory: Callable[[], composer.Task] | None = None,
+        state_workers: int = 1,
+        state_processes: bool = False,
+        slots_per_world: int = 2,
+        refill_interval: int = 8,
+        check_action_values: bool | None = None,
     ):
         self.num_envs = argument_checks.integer(num_envs=num_envs)
-        outputs.check_array_type(array_type)
-        if not isinstance(device, str):
+        arrays.check_array_type(array_type)
+        if autoreset_mode not in AUTORESET_MODES:
+            raise ValueError(
+                f"autoreset_mode: expected one of {list(AUTORESET_MODES)}, got {autoreset_mode!r}"
+            )
+        if device is not None and not isinstance(device, str):
             raise ValueError(
                 f"device: expected a Warp device name such as 'cpu' or 'cuda:0', got {device!r}"
             )
         if not isinstance(time_limit, numbers.Real) or math.isnan(time_limit) or time_limit < 0:
             raise ValueError(f"time_limit: expected a number of seconds >= 0, got {time_limit!r}")
+        for name, value in (
+            ("state_workers", state_workers),
+            ("slots_per_world", slots_per_world),
+            ("refill_interval", refill_interval),
+        ):
+            argument_checks.integer(**{name: value})
         self._batch_task = for_task(task)
         cpu_task = self._batch_task.task
         hooks = EnvironmentHooks(cpu_task)
@@ -181,30 +225,67 @@ class BatchEnvironment:
         host = mjcf.Physics.from_mjcf_model(cpu_task.root_entity.mjcf_model)
         with host.reset_context():
             hooks.after_compile(host, np.random.RandomState(0))
+        wp = _warp.load()[0]
+        device = _warp.default_device() if device is None else device
+        self._arrays = arrays.ArrayBridge(wp, wp.get_device(device), array_type)
         fields = tuple(self._batch_task.batched_model_fields) + tuple(batched_model_fields)
         self._physics = BatchPhysics(
             host,
             self.num_envs,
-            device=device,
+            arrays=self._arrays,
             batched_model_fields=fields,
             nconmax=nconmax,
             njmax=njmax,
         )
         self._batch_task.after_compile(self._physics)
-        self._outputs = outputs.DeviceOutputs(_warp.load()[0], self._physics.device, array_type)
-        self._on_device = array_type != "numpy"
-        self._controls_on_device = type(self._batch_task).before_step is BatchTask.before_step
+        self.autoreset_mode = autoreset_mode
+        self._same_step = autoreset_mode == "same_step"
+        self._check_action_values = (
+            not self._physics.is_cuda if check_action_values is None else check_action_values
+        )
         self._action_spec = cpu_task.action_spec(host)
         self._action_shape = (self.num_envs, *self._action_spec.shape)
         self._observables = BatchObservables(
-            cpu_task.observables, self._physics, strip_singleton_obs_buffer_dim
+            cpu_task.observables,
+            self._physics,
+            strip_singleton_obs_buffer_dim,
+            self._batch_task.observable_readers(self._physics),
         )
         self._step_limit = _control_step_limit(
             float(time_limit), cpu_task.physics_timestep, self._n_sub_steps
         )
-        self._steps = np.zeros(self.num_envs, dtype=np.int64)
-        self._reset_next = np.ones(self.num_envs, dtype=bool)
-        self._discount = np.ones(self.num_envs)
+        self._slots = None
+        if not has_array_initializer(self._batch_task):
+            maker = StateMaker(self._batch_task, host, fields)
+            producer = StateProducer(
+                maker,
+                workers=state_workers,
+                processes=state_processes,
+                task_factory=task_factory,
+                batch_task_type=type(self._batch_task),
+                model_fields=fields,
+            )
+            self._slots = StateSlots(
+                self._physics,
+                producer,
+                self._random_states,
+                model_fields=fields,
+                slots_per_world=slots_per_world,
+                refill_interval=refill_interval,
+            )
+            self._batch_task.episode_values = self._slots.values
+        xp, n = self._physics.xp, self.num_envs
+        self._mask, self._mask_view = self._arrays.empty((n,), bool)
+        self._steps = self._arrays.asarray(np.zeros(n, np.int32))
+        self._ended = self._arrays.asarray(np.zeros(n, bool))
+        self._discount = self._arrays.asarray(np.ones(n, np.float32))
+        self._zero = xp.zeros_like(self._discount)
+        self._one = xp.ones_like(self._discount)
+        self._step_types = {
+            kind: self._arrays.asarray(np.full(n, kind, np.int8)) for kind in (_FIRST, _MID, _LAST)
+        }
+        self._final_observation: dict[str, Any] = {}
+        self._started = False
 
     @property
     def physics(self) -> BatchPhysics:
@@ -217,13 +298,32 @@ class BatchEnvironment:
         return self._batch_task
 
     @property
+    def xp(self):
+        """The array namespace of the batch's device arrays (see `composer.batch.arrays`)."""
+        return self._physics.xp
+
+    @property
     def random_states(self) -> list[np.random.RandomState]:
-        """Each world's random generator."""
+        """Each world's random generator (drawn from by the initial-state producers)."""
         return self._random_states
 
+    @property
+    def final_observation(self) -> dict[str, Any]:
+        """With autoreset "same_step": the last observation of the episodes that ended at
+        the last step (rows of other worlds are that step's observation), as `array_type`."""
+        return {key: self.hand_out(value) for key, value in self._final_observation.items()}
+
+    def initial_state_stats(self) -> InitialStateStats | None:
+        """How the initial-state producers kept up (None for array-code initial states)."""
+        return None if self._slots is None else self._slots.stats
+
     def reseed(self, seed: int | np.random.RandomState | None) -> None:
-        """Reseeds every world's random generator from `seed`, as the constructor does."""
-        self._random_states = _random_states(self.num_envs, seed, None)
+        """Reseeds every world's random generator from `seed`, as the constructor does; the
+        next `step` or `reset` starts every world's episode anew."""
+        self._random_states[:] = _random_states(self.num_envs, seed, None)
+        if self._slots is not None:
+            self._slots.restart(self._random_states)
+        self._started = False
 
     def action_spec(self) -> specs.BoundedArray:
         """One world's action spec (the CPU task's); actions have a leading num_envs axis."""
@@ -232,16 +332,21 @@ class BatchEnvironment:
     def observation_spec(self) -> dict[str, specs.Array]:
         """One world's observation specs by key (float32, the shapes of one world)."""
         return {
-            name: specs.Array(value.shape[1:], value.dtype, name)
+            name: specs.Array(tuple(value.shape[1:]), np.float32, name)
             for name, value in self._observables.read().items()
         }
 
-    def _reset_worlds(self, env_ids: np.ndarray) -> None:
-        states = [self._random_states[i] for i in env_ids]
-        self._batch_task.initialize_episode(self._physics, env_ids, states)
-        self._physics.forward(env_ids, actuation=False)
-        self._steps[env_ids] = 0
-        self._reset_next[env_ids] = False
+    def _start_episodes(self, mask) -> None:
+        """Starts a new episode in the worlds of `mask` (an array of the namespace)."""
+        physics = self._physics
+        if physics.arrays.library == "numpy" and not mask.any():
+            return  # free to know on Warp's CPU device; on CUDA the masked work just runs
+        self._mask_view[...] = mask
+        if self._slots is None:
+            self._batch_task.initialize_episode(physics, self._mask_view)
+        else:
+            self._slots.apply(self._mask)
+        physics.forward(self._mask, actuation=False)
 
     def reset(self) -> BatchTimeStep:
         """Starts a new episode in every world.
@@ -249,99 +354,109 @@ class BatchEnvironment:
         Returns:
           A `BatchTimeStep` with every step type FIRST, rewards 0 and discounts 1.
         """
-        self._reset_worlds(np.arange(self.num_envs))
-        n = self.num_envs
-        self._discount = np.ones(n)
-        return self._time_step(np.full(n, _FIRST, np.int8), np.zeros(n), self._discount)
-
-    def _time_step(self, step_type, reward, discount) -> BatchTimeStep:
-        """The results of this step, handed out as `array_type` (see the module docstring)."""
-        if not self._on_device:
-            return BatchTimeStep(step_type, reward, discount, self._observables.read())
-        observation = self._observables.read_device(self._outputs)
-        return BatchTimeStep(
-            self.hand_out(step_type),
-            self.hand_out(reward),
-            self.hand_out(discount),
-            {name: self._outputs.hand_out(value) for name, value in observation.items()},
+        if self._slots is not None:
+            self._slots.refill(wait=True)
+        xp = self.xp
+        every = xp.ones(self.num_envs, dtype=xp.bool, device=self._arrays.xp_device)
+        self._start_episodes(every)
+        self._started = True
+        self._steps = xp.zeros_like(self._steps)
+        self._ended = xp.zeros_like(self._ended)
+        self._discount = self._one
+        return self._time_step(
+            self._step_types[_FIRST], self._zero, self._one, self._observables.read()
         )
 
-    def hand_out(self, values: np.ndarray) -> Any:
-        """Host `values` as this environment's `array_type` (on its device unless NumPy)."""
-        if not self._on_device:
-            return values
-        return self._outputs.hand_out(self._outputs.upload(values))
+    def _time_step(self, step_type, reward, discount, observation) -> BatchTimeStep:
+        hand_out = self._arrays.hand_out
+        return BatchTimeStep(
+            hand_out(step_type),
+            hand_out(reward),
+            hand_out(discount),
+            {name: hand_out(value) for name, value in observation.items()},
+        )
+
+    def hand_out(self, values) -> Any:
+        """An array of the namespace (or host values) as this environment's `array_type`."""
+        if not arrays.array_library(values) and isinstance(values, np.ndarray):
+            values = self._arrays.asarray(values)
+        return self._arrays.hand_out(values)
 
     def episode_ends(self) -> EpisodeEnds:
-        """How the episodes that ended at the last `step` ended (host arrays).
+        """How the episodes that ended at the last `step` ended, as arrays of the namespace.
 
         Returns:
           An `EpisodeEnds`: `terminated` where the task ended an episode with discount 0,
           `truncated` where an episode ended with a non-zero discount (a time limit).
         """
-        ended = self._reset_next
-        terminated = ended & (self._discount == 0.0)
-        return EpisodeEnds(terminated=terminated, truncated=ended & ~terminated)
-
-    def _apply_action(self, action) -> None:
-        """Checks `action` and sets the controls of every world (see `actions`)."""
-        checked = actions.check_action(action, self._action_shape, self._outputs)
-        physics = self._physics
-        if not isinstance(checked, np.ndarray):
-            if self._controls_on_device:
-                wp = _warp.load()[0]
-                ctrl = physics.warp_data.ctrl
-                wp.launch(
-                    kernels.kernels().write_float32,
-                    dim=ctrl.shape,
-                    inputs=[checked, ctrl],
-                    device=physics.device,
-                )
-                return
-            checked = checked.numpy().astype(np.float64).reshape(self._action_shape)
-        self._batch_task.before_step(physics, checked)
+        terminated = self._ended & (self._discount == 0.0)
+        return EpisodeEnds(terminated=terminated, truncated=self._ended & ~terminated)
 
     def step(self, action) -> BatchTimeStep:
-        """Steps every world by one control step; worlds after LAST start a new episode.
+        """Steps every world by one control step; see the class docstring for autoreset.
 
         Args:
           action: shape (num_envs, *action_spec().shape): a NumPy array (or anything
-            NumPy reads), or a Warp, torch or JAX array on the batch's device (used there,
-            without a copy, when the task only sets the controls).
+            NumPy reads), or a Warp, torch or JAX array on the batch's device (used there
+            without a copy).
 
         Returns:
-          A `BatchTimeStep`: FIRST (reward 0, discount 1) for worlds that were reset, LAST
-          for worlds whose episode ended (the task terminated it or the time limit passed),
-          MID for the others.
+          A `BatchTimeStep`: LAST for worlds whose episode ended (the task terminated it or
+          the time limit passed), FIRST (reward 0, discount 1) for worlds reset at this step
+          under "next_step", MID for the others.
 
         Raises:
           ValueError: for an action of the wrong shape or with NaN or infinity; nothing is
             stepped.
         """
-        if self._reset_next.all():
-            actions.check_action(action, self._action_shape, self._outputs)
-            return self.reset()
-        restarting = np.flatnonzero(self._reset_next)
-        physics, task = self._physics, self._batch_task
-        self._apply_action(action)
-        physics.step(self._n_sub_steps)
-        if restarting.size:
-            # These worlds were stepped with the others; their reset overwrites that step.
-            self._reset_worlds(restarting)
-        self._steps += 1
-        self._steps[restarting] = 0
-        reward = np.asarray(task.get_reward(physics), dtype=np.float64)
-        discount = np.asarray(task.get_discount(physics), dtype=np.float64)
-        ended = np.asarray(task.should_terminate_episode(physics), dtype=bool) | (
-            self._steps >= self._step_limit
+        checked = actions.check_action(
+            action, self._action_shape, self._arrays, check_values=self._check_action_values
         )
-        ended[restarting] = False
-        step_type = np.where(ended, _LAST, _MID).astype(np.int8)
-        step_type[restarting] = _FIRST
-        reward[restarting] = 0.0
-        discount[restarting] = 1.0
-        self._reset_next, self._discount = ended, discount
-        return self._time_step(step_type, reward, discount)
+        if not self._started:
+            return self.reset()
+        xp, physics, task = self.xp, self._physics, self._batch_task
+        task.before_step(physics, checked)
+        physics.step(self._n_sub_steps)
+        restarting = self._ended if not self._same_step else xp.zeros_like(self._ended)
+        if not self._same_step:
+            # These worlds were stepped with the others; their reset overwrites that step.
+            self._start_episodes(restarting)
+        steps = xp.where(restarting, 0, self._steps + 1)
+        reward = xp.astype(task.get_reward(physics), xp.float32)
+        discount = xp.astype(task.get_discount(physics), xp.float32)
+        ended = xp.astype(task.should_terminate_episode(physics), xp.bool)
+        ended = (ended | (steps >= self._step_limit)) & ~restarting
+        step_type = xp.where(
+            restarting,
+            self._step_types[_FIRST],
+            xp.where(ended, self._step_types[_LAST], self._step_types[_MID]),
+        )
+        reward = xp.where(restarting, self._zero, reward)
+        discount = xp.where(restarting, self._one, discount)
+        observation = self._observables.read()
+        if self._same_step:
+            self._final_observation = observation
+            self._start_episodes(ended)
+            steps = xp.where(ended, 0, steps)
+            fresh = self._observables.read()
+            observation = {
+                key: xp.where(_rows(xp, ended, value), fresh[key], value)
+                for key, value in observation.items()
+            }
+        self._steps, self._ended, self._discount = steps, ended, discount
+        if self._slots is not None:
+            self._slots.after_step()
+        return self._time_step(step_type, reward, discount, observation)
+
+    def close(self) -> None:
+        """Stops the initial-state producers."""
+        if self._slots is not None:
+            self._slots.close()
+
+
+def _rows(xp, mask, like):
+    """`mask` (num_envs,) shaped to broadcast over the rows of `like`."""
+    return xp.reshape(mask, (mask.shape[0],) + (1,) * (like.ndim - 1))
 
 
 def _hook_owners(task: composer.Task, names: tuple[str, ...]) -> list[str]:

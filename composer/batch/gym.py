@@ -1,9 +1,14 @@
 """A `BatchEnvironment` as a `gymnasium.vector.VectorEnv` (imports gymnasium and Warp).
 
 `step` returns `(observations, rewards, terminations, truncations, infos)` for all worlds at
-once, with Gymnasium's NEXT_STEP autoreset: the step after a world's episode ended resets
-that world (its action is ignored) and returns its first observation with reward 0. An
-episode that ends with discount 0 (the task ended it) is terminated, one that ends with a
+once, with the batch's autoreset mode as Gymnasium names it:
+- NEXT_STEP: the step after a world's episode ended resets that world (its action is
+  ignored) and returns its first observation with reward 0.
+- SAME_STEP: the step in which a world's episode ends resets it and returns the first
+  observation of the next episode; the last observation of the ended one is in
+  `infos["final_obs"]`, for the worlds of `infos["_final_obs"]`.
+
+An episode that ends with discount 0 (the task ended it) is terminated, one that ends with a
 non-zero discount (the time limit) truncated, as in `composer.gym.GymnasiumEnv`.
 Observations are the batch's arrays: a dict of (num_envs, ...) float32 arrays, of the
 batch's `array_type` (NumPy, or Warp, torch or JAX arrays on its device), as are rewards,
@@ -20,7 +25,23 @@ from gymnasium.vector.utils import batch_space
 from composer.batch.environment import BatchEnvironment, BatchTimeStep
 from composer.gym.spec_spaces import box_from_spec
 
-__all__ = ["WarpVectorEnv"]
+__all__ = ["WarpVectorEnv", "autoreset_mode_name"]
+
+_MODES = {AutoresetMode.NEXT_STEP: "next_step", AutoresetMode.SAME_STEP: "same_step"}
+
+
+def autoreset_mode_name(mode) -> str:
+    """The `BatchEnvironment` autoreset mode of a Gymnasium `AutoresetMode` (or its value).
+
+    Raises:
+      ValueError: for DISABLED, which a batch does not offer.
+    """
+    gymnasium_mode = AutoresetMode(mode)
+    if gymnasium_mode not in _MODES:
+        raise ValueError(
+            f"autoreset_mode: backend 'warp' offers NEXT_STEP and SAME_STEP, got {mode!r}"
+        )
+    return _MODES[gymnasium_mode]
 
 
 class WarpVectorEnv(VectorEnv):
@@ -33,12 +54,15 @@ class WarpVectorEnv(VectorEnv):
     worlds; `reset(options=...)` is refused (every reset resets all worlds).
     """
 
-    metadata = {"autoreset_mode": AutoresetMode.NEXT_STEP}
-
     def __init__(self, env: BatchEnvironment):
         if not isinstance(env, BatchEnvironment):
             raise TypeError(f"env: expected a composer.batch.BatchEnvironment, got {env!r}")
         self.env = env
+        self.metadata = {
+            "autoreset_mode": AutoresetMode.SAME_STEP
+            if env.autoreset_mode == "same_step"
+            else AutoresetMode.NEXT_STEP
+        }
         self.num_envs = env.num_envs
         self.single_observation_space = Dict(
             {key: box_from_spec(spec) for key, spec in env.observation_spec().items()}
@@ -72,16 +96,25 @@ class WarpVectorEnv(VectorEnv):
         """Steps every world (see the module docstring for autoreset).
 
         Returns:
-          observations (dict of (num_envs, ...) arrays), rewards (num_envs,) float64,
-          terminations and truncations (num_envs,) bool, and infos with 'discount', all
-          of the batch's `array_type`.
+          observations (dict of (num_envs, ...) arrays), rewards (num_envs,) float32,
+          terminations and truncations (num_envs,) bool, and infos with 'discount' (and,
+          with SAME_STEP, 'final_obs' and '_final_obs'), all of the batch's `array_type`.
         """
-        time_step: BatchTimeStep = self.env.step(actions)
-        ends = self.env.episode_ends()
+        env = self.env
+        time_step: BatchTimeStep = env.step(actions)
+        ends = env.episode_ends()
+        infos = {"discount": time_step.discount}
+        if env.autoreset_mode == "same_step":
+            infos["final_obs"] = env.final_observation
+            infos["_final_obs"] = env.hand_out(ends.terminated | ends.truncated)
         return (
             time_step.observation,
             time_step.reward,
-            self.env.hand_out(ends.terminated),
-            self.env.hand_out(ends.truncated),
-            {"discount": time_step.discount},
+            env.hand_out(ends.terminated),
+            env.hand_out(ends.truncated),
+            infos,
         )
+
+    def close_extras(self, **kwargs) -> None:
+        """Stops the batch's initial-state producers."""
+        self.env.close()

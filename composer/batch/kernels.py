@@ -1,7 +1,7 @@
 """The Warp kernels of `composer.batch`, defined on first use (importing this needs no Warp).
 
-Every kernel works on two-dimensional arrays whose first axis is the world, as views of
-MuJoCo Warp's per-world arrays made by `rows`.
+Every kernel works on arrays whose first axis is the world, most of them on two-dimensional
+views of MuJoCo Warp's per-world arrays made by `rows`.
 """
 
 from types import SimpleNamespace
@@ -18,8 +18,8 @@ def kernels() -> SimpleNamespace:
     """The kernels, compiled by Warp at their first launch.
 
     Returns:
-      A namespace with `restore_columns`, `copy_worlds`, `gather_columns`, `count_nonfinite`
-      and `write_float32` (documented on each).
+      A namespace with `restore_columns`, `copy_worlds`, `count_nonfinite`,
+      `contact_worlds`, `take_slots` and `count_episodes` (documented on each).
     """
     global _kernels
     if _kernels is None:
@@ -64,16 +64,6 @@ def _define(wp) -> SimpleNamespace:
             target[world, k] = source[world, k]
 
     @wp.kernel(module="unique")
-    def gather_columns(
-        source: wp.array2d(dtype=wp.float32),
-        columns: wp.array(dtype=wp.int32),
-        out: wp.array2d(dtype=wp.float32),
-    ):
-        """out[world, j] = source[world, columns[j]]; a one-row source serves every world."""
-        world, j = wp.tid()
-        out[world, j] = source[world % source.shape[0], columns[j]]
-
-    @wp.kernel(module="unique")
     def count_nonfinite(values: wp.array2d(dtype=Any), count: wp.array(dtype=wp.int32)):
         """Adds the number of NaN or infinite entries of `values` to count[0]."""
         i, j = wp.tid()
@@ -81,15 +71,64 @@ def _define(wp) -> SimpleNamespace:
             wp.atomic_add(count, 0, 1)
 
     @wp.kernel(module="unique")
-    def write_float32(source: wp.array2d(dtype=Any), target: wp.array2d(dtype=wp.float32)):
-        """target[i, j] = float32(source[i, j])."""
-        i, j = wp.tid()
-        target[i, j] = wp.float32(source[i, j])
+    def contact_worlds(
+        nacon: wp.array(dtype=wp.int32),
+        geom: wp.array(dtype=wp.vec2i),
+        worldid: wp.array(dtype=wp.int32),
+        codes: wp.array(dtype=wp.int32),
+        out: wp.array(dtype=wp.bool),
+    ):
+        """out[world] = True where an active contact pairs a code-1 geom with a code-2 one.
+
+        A geom's code has bit 1 for the first set and bit 2 for the second.
+        """
+        k = wp.tid()
+        if k >= nacon[0]:
+            return
+        pair = geom[k]
+        a = codes[pair[0]]
+        b = codes[pair[1]]
+        if ((a & 1) != 0 and (b & 2) != 0) or ((a & 2) != 0 and (b & 1) != 0):
+            out[worldid[k]] = True
+
+    @wp.kernel(module="unique")
+    def take_slots(
+        mask: wp.array(dtype=wp.bool),
+        counters: wp.array2d(dtype=wp.int32),
+        slots_per_world: int,
+        slots: wp.array2d(dtype=wp.float32),
+        target: wp.array2d(dtype=wp.float32),
+    ):
+        """target[world] = the slot of world's next episode, for the worlds of `mask`.
+
+        counters[0, world] is the number of episodes the world has started (the index of its
+        next one); `slots` holds `slots_per_world` rows per world, episode e in row
+        e % slots_per_world.
+        """
+        world, k = wp.tid()
+        if mask[world]:
+            row = world * slots_per_world + counters[0, world] % slots_per_world
+            target[world, k] = slots[row, k]
+
+    @wp.kernel(module="unique")
+    def count_episodes(
+        mask: wp.array(dtype=wp.bool),
+        uploaded: wp.array(dtype=wp.int32),
+        counters: wp.array2d(dtype=wp.int32),
+    ):
+        """Counts a started episode for the worlds of `mask`: counters[0] += 1, and
+        counters[1] += 1 where the episode's state was not uploaded (a reused state)."""
+        world = wp.tid()
+        if mask[world]:
+            if counters[0, world] >= uploaded[world]:
+                counters[1, world] = counters[1, world] + 1
+            counters[0, world] = counters[0, world] + 1
 
     return SimpleNamespace(
         restore_columns=restore_columns,
         copy_worlds=copy_worlds,
-        gather_columns=gather_columns,
         count_nonfinite=count_nonfinite,
-        write_float32=write_float32,
+        contact_worlds=contact_worlds,
+        take_slots=take_slots,
+        count_episodes=count_episodes,
     )

@@ -13,19 +13,17 @@ identity on a buffer of one sample.
 
 import functools
 from collections.abc import Callable, Mapping
-from typing import Any, NamedTuple
+from typing import Any
 
 import numpy as np
 
-from composer.batch import _warp, kernels
-from composer.batch.outputs import DeviceOutputs
 from composer.entity import _RootBodyFeature
 from composer.observation.observable import base
 from composer.observation.observable.mjcf import MJCFFeature
 
 __all__ = ["BatchObservables", "FieldSelection", "batch_reader"]
 
-Reader = Callable[[], np.ndarray]
+Reader = Callable[[], Any]
 
 
 @functools.singledispatch
@@ -44,33 +42,40 @@ def batch_reader(observable: base.Observable, physics) -> Reader:
     )
 
 
-class FieldSelection(NamedTuple):
+class FieldSelection:
     """An observable that is a fixed selection of one field's entries in every world.
 
-    Calling it reads the selection on the host; `BatchObservables.read_device` gathers it on
-    the device instead, without a host round trip.
+    Calling it gathers the selection on the device (`xp.take`), in the batch's namespace.
 
-    Attributes:
+    Args:
       field: the batched MjModel/MjData field (`BatchPhysics.field`).
       columns: int array, the flat indices into one world's field of the observation's
         entries, in the shape of one world's observation.
     """
 
-    field: Any
-    columns: np.ndarray
+    def __init__(self, physics, field, columns: np.ndarray):
+        self._physics = physics
+        self._field = field
+        self._shape = columns.shape
+        self._columns = physics.arrays.asarray(np.asarray(columns).ravel().astype(np.int64))
 
-    def __call__(self) -> np.ndarray:
-        values = self.field.read()
-        return values.reshape(values.shape[0], -1)[:, self.columns]
+    def __call__(self):
+        xp, physics = self._physics.xp, self._physics
+        values = self._field.read()
+        flat = xp.reshape(values, (values.shape[0], -1))
+        taken = xp.take(flat, self._columns, axis=1)
+        return xp.reshape(taken, (physics.num_envs, *self._shape))
 
 
-def _selection(binding, kind: str, indices) -> FieldSelection:
+def _selection(physics, binding, kind: str, indices) -> FieldSelection:
     """The entries of `binding.<kind>` that the per-world `indices` select, in turn."""
     field, index = binding._field_and_index(kind)
+    if not isinstance(index, (int, slice, np.integer)):
+        index = physics.arrays.to_host(index)
     columns = np.arange(int(np.prod(field.c_shape))).reshape(field.c_shape)[index]
     for key in indices:
         columns = columns[key]
-    return FieldSelection(field, np.asarray(columns))
+    return FieldSelection(physics, field, np.asarray(columns))
 
 
 @batch_reader.register
@@ -78,13 +83,13 @@ def _mjcf_feature(observable: MJCFFeature, physics) -> Reader:
     # MJCFFeature keeps its field name, elements and indices private; this reader is its
     # batched twin in the same package.
     binding = physics.bind(observable._mjcf_element)
-    return _selection(binding, observable._kind, observable._indices)
+    return _selection(physics, binding, observable._kind, observable._indices)
 
 
 @batch_reader.register
 def _root_body_feature(observable: _RootBodyFeature, physics) -> Reader:
     binding = physics.bind(observable._entity.root_body)
-    return _selection(binding, observable._kind, (observable._index,))
+    return _selection(physics, binding, observable._kind, (observable._index,))
 
 
 def _check_options(name: str, observable: base.Observable) -> None:
@@ -110,7 +115,7 @@ def _check_options(name: str, observable: base.Observable) -> None:
 
 
 class BatchObservables:
-    """Reads the enabled observables of a task for every world.
+    """Reads the enabled observables of a task for every world, on the device.
 
     Args:
       observables: the task's observables by key (`task.observables`); disabled ones are
@@ -119,6 +124,8 @@ class BatchObservables:
       strip_singleton_obs_buffer_dim: as in `composer.Environment`: False keeps each
         observation's leading buffer axis of length 1, so a world's observation has the
         shape the CPU environment gives it.
+      readers: batched readers that replace the generic ones, by key
+        (`BatchTask.observable_readers`).
 
     Raises:
       ValueError: for an option a batch cannot apply (see the module docstring).
@@ -126,82 +133,35 @@ class BatchObservables:
     """
 
     def __init__(
-        self, observables: Mapping[str, base.Observable], physics, strip_singleton_obs_buffer_dim
+        self,
+        observables: Mapping[str, base.Observable],
+        physics,
+        strip_singleton_obs_buffer_dim: bool,
+        readers: Mapping[str, Reader] | None = None,
     ):
+        readers = dict(readers or {})
         self._readers: dict[str, Reader] = {}
         for name, observable in observables.items():
             if not observable.enabled:
                 continue
             _check_options(name, observable)
-            self._readers[name] = batch_reader(observable, physics)
+            reader = readers.get(name)
+            if reader is None:
+                reader = batch_reader(observable, physics)
+            self._readers[name] = reader
         self._add_buffer_axis = not strip_singleton_obs_buffer_dim
-        self._num_envs = physics.num_envs
-        self._gathers: dict[str, _DeviceGather] | None = None
+        self._xp = physics.xp
 
-    def read(self) -> dict[str, np.ndarray]:
-        """Returns the current observation of every world, by key.
-
-        Returns:
-          A dict of arrays of shape (num_envs, 1, *value shape), or (num_envs, *value shape)
-          with `strip_singleton_obs_buffer_dim`.
-        """
-        observation = {}
-        for name, read in self._readers.items():
-            value = np.asarray(read())
-            observation[name] = value[:, None] if self._add_buffer_axis else value
-        return observation
-
-    def read_device(self, outputs: DeviceOutputs) -> dict[str, Any]:
-        """Returns the current observation of every world as new Warp arrays on the device.
-
-        A `FieldSelection` of a float32 field is gathered on the device by one kernel launch,
-        without a host round trip; any other observable is read on the host and copied to
-        the device.
+    def read(self) -> dict[str, Any]:
+        """Returns the current observation of every world, by key, as new float32 arrays.
 
         Returns:
-          A dict of Warp arrays, shaped as `read` shapes its arrays.
+          A dict of arrays of the batch's namespace, of shape (num_envs, 1, *value shape),
+          or (num_envs, *value shape) with `strip_singleton_obs_buffer_dim`.
         """
-        if self._gathers is None:
-            self._gathers = _plan_gathers(self._readers, outputs)
-        wp = _warp.load()[0]
+        xp = self._xp
         observation = {}
         for name, read in self._readers.items():
-            gather = self._gathers.get(name)
-            if gather is None:
-                value = outputs.upload(np.asarray(read()))
-            else:
-                value = outputs.empty((self._num_envs, gather.columns.shape[0]))
-                wp.launch(
-                    kernels.kernels().gather_columns,
-                    dim=value.shape,
-                    inputs=[gather.source, gather.columns, value],
-                    device=outputs.device,
-                )
-                value = value.reshape((self._num_envs, *gather.shape))
-            if self._add_buffer_axis:
-                value = value.reshape((value.shape[0], 1, *value.shape[1:]))
-            observation[name] = value
+            value = xp.astype(read(), xp.float32, copy=True)
+            observation[name] = value[:, None, ...] if self._add_buffer_axis else value
         return observation
-
-
-class _DeviceGather(NamedTuple):
-    """What `read_device` launches for one observable: source rows and their columns."""
-
-    source: Any
-    columns: Any
-    shape: tuple[int, ...]
-
-
-def _plan_gathers(readers: Mapping[str, Reader], outputs: DeviceOutputs) -> dict:
-    """The device gathers of the readers that are float32 `FieldSelection`s, by key."""
-    wp = _warp.load()[0]
-    gathers = {}
-    for name, read in readers.items():
-        if not isinstance(read, FieldSelection):
-            continue
-        source = read.field.device_rows()
-        if source is None:
-            continue
-        columns = wp.array(read.columns.ravel().astype(np.int32), device=outputs.device)
-        gathers[name] = _DeviceGather(source, columns, read.columns.shape)
-    return gathers

@@ -2,35 +2,37 @@
 
 The model is compiled once by `mjcf` (a host `mjcf.Physics`, which also resolves MJCF elements
 to MuJoCo ids) and put on the device with `mujoco_warp.put_model` / `put_data(nworld=...)`.
-Every field reads as a NumPy array with a leading `num_envs` axis and the trailing shape of the
-MjModel/MjData field of the same name (`data.xmat` is (num_envs, nbody, 9), as in C MuJoCo).
+Every field reads as an array of the batch's namespace `xp` (see `composer.batch.arrays`)
+with a leading `num_envs` axis and the trailing shape of the MjModel/MjData field of the
+same name (`data.xmat` is (num_envs, nbody, 9), as in C MuJoCo), in float32.
 
-Where values live (the one rule for reads and writes): on Warp's CPU device a field is a
-NumPy view of the Warp array, so reads cost nothing and writes go straight to the worlds; on
-a CUDA device a read is a host copy and a write copies the field back. Writes through
-`bind`/`named` arrays touch only the worlds selected by the first index
-(`bind(joints).qpos[env_ids] = ...`). Model fields are shared by all worlds unless named in
-`batched_model_fields`, which gives each world its own row (MuJoCo Warp's batched model
-fields); writing a shared field for some worlds only raises. Derived quantities are not
-recomputed after a write: `forward(env_ids)` does that, and the environment calls it after
-every reset.
+Where values live (the one rule for reads and writes): the device is the source of truth.
+A field is a view of MuJoCo Warp's own array, made once, so reads cost no copy and writes
+land in the worlds: `bind(joints).qpos[env_ids] = ...` (NumPy) or `bind(joints).set('qpos',
+values, env_ids)` (any namespace) touch only the worlds selected. Model fields are shared by
+all worlds unless named in `batched_model_fields`, which gives each world its own row
+(MuJoCo Warp's batched model fields); writing a shared field raises. Derived quantities are
+not recomputed after a write: `forward(mask)` does that for the worlds of a mask, without
+touching the others.
 """
 
 import dataclasses
 from collections.abc import Sequence
-from typing import Any, NamedTuple
+from typing import Any
 
 import mujoco
 import numpy as np
 
 import mjcf
 from composer.batch import _warp, kernels
+from composer.batch.arrays import ArrayBridge, array_library
 from mjcf import binding as mjcf_binding
 from mujoco_physics import field_layout
 
-__all__ = ["BatchBinding", "BatchPhysics", "Contacts"]
+__all__ = ["BatchBinding", "BatchPhysics", "ContactWatch"]
 
 _ACC_STAGE = int(mujoco.mjtStage.mjSTAGE_ACC)
+_STATE_SPEC = int(mujoco.mjtState.mjSTATE_INTEGRATION)
 
 
 def _spec_shape(field_type) -> tuple:
@@ -38,7 +40,13 @@ def _spec_shape(field_type) -> tuple:
 
 
 class _Field:
-    """One MjModel/MjData field of every world, as NumPy arrays of shape (num_envs, *C shape)."""
+    """One MjModel/MjData field of every world, as a view in the batch's namespace.
+
+    Attributes:
+      view: the field's device memory, shape (num_envs, *C shape) for a per-world field,
+        (1, *C shape) for a model field shared by every world.
+      per_world: whether each world has its own row.
+    """
 
     def __init__(self, physics: "BatchPhysics", struct: str, name: str):
         self.struct = struct
@@ -47,75 +55,52 @@ class _Field:
         host = physics.mj_model if struct == field_layout.MODEL else physics.host.data.ptr
         self.c_shape = np.shape(getattr(host, name))
         self.per_world = struct == field_layout.DATA or name in physics.batched_model_fields
-
-    def _device_array(self):
-        owner = (
-            self._physics.warp_model
-            if self.struct == field_layout.MODEL
-            else self._physics.warp_data
-        )
+        owner = physics.warp_model if struct == field_layout.MODEL else physics.warp_data
         try:
-            return getattr(owner, self.name)
+            self.device_array = getattr(owner, name)
         except AttributeError:
             raise AttributeError(
-                f"MuJoCo Warp has no {self.struct} field {self.name!r} (MuJoCo has it; Warp "
-                "does not simulate it)"
+                f"MuJoCo Warp has no {struct} field {name!r} (MuJoCo has it; Warp does not "
+                "simulate it)"
             ) from None
+        rows = physics.num_envs if self.per_world else 1
+        self.view = physics.arrays.view(self.device_array, (rows, *self.c_shape))
 
-    def read(self) -> np.ndarray:
-        """The field of all worlds: a view on the CPU device, a host copy on CUDA."""
-        array = self._device_array()
-        host = array.numpy()
-        num_envs = self._physics.num_envs
+    def read(self) -> Any:
+        """The field of all worlds, (num_envs, *C shape); a shared field is broadcast."""
         if self.per_world:
-            return host.reshape((num_envs,) + self.c_shape)
-        # A shared field: one row (or no world axis at all) for every world.
-        return np.broadcast_to(host.reshape(self.c_shape), (num_envs,) + self.c_shape)
+            return self.view
+        xp = self._physics.xp
+        return xp.broadcast_to(self.view, (self._physics.num_envs, *self.c_shape))
 
-    def device_rows(self):
-        """The field's device memory as a float32 (worlds, entries of one world) Warp array.
-
-        Returns:
-          The alias (one row for a model field shared by every world), or None for a field
-          that is not float32 or not contiguous on the device.
-        """
-        array = self._device_array()
-        wp = self._physics._wp
-        scalar = getattr(array.dtype, "_wp_scalar_type_", array.dtype)
-        if scalar is not wp.float32 or not array.is_contiguous:
-            return None
-        per_world = int(np.prod(self.c_shape))
-        return kernels.rows(array, wp.float32, array.capacity // 4 // per_world)
-
-    def write(self, worlds: np.ndarray, index, values: np.ndarray) -> None:
-        """Writes `values` (shape (len(worlds), *selected)) into rows `index` of `worlds`."""
-        num_envs = self._physics.num_envs
+    def check_writable(self) -> None:
+        """Raises ValueError for a model field shared by every world."""
         if not self.per_world:
             raise ValueError(
-                f"model field {self.name!r} is shared by all {num_envs} worlds; pass "
-                f"batched_model_fields=({self.name!r},) to give each world its own"
+                f"model field {self.name!r} is shared by all {self._physics.num_envs} worlds; "
+                f"pass batched_model_fields=({self.name!r},) to give each world its own"
             )
-        target = self.read()
-        if isinstance(index, np.ndarray):
-            target[worlds[:, None], index] = values
-        else:
-            target[worlds, index] = values
-        if self._physics.is_cuda:
-            array = self._device_array()
-            array.assign(target.reshape(array.numpy().shape))
 
-    def write_shared(self, value: np.ndarray) -> None:
-        """Writes `value` (the C field's shape) for every world; fields Warp lacks are skipped."""
-        try:
-            array = self._device_array()
-        except AttributeError:
-            return
-        host = array.numpy()
-        array.assign(np.asarray(value).astype(host.dtype).reshape(host.shape))
+    def write(self, worlds, index, values) -> None:
+        """Writes `values` into rows `index` of `worlds` (an int array, or None for all)."""
+        self.check_writable()
+        view = self.view
+        if _is_host(values):
+            values = self._physics.arrays.asarray(values)
+        if worlds is None:
+            view[:, index] = values
+        elif isinstance(index, slice) or np.isscalar(index):
+            view[worlds, index] = values
+        else:
+            view[worlds[:, None], index] = values
+
+
+def _is_host(values) -> bool:
+    return isinstance(values, (np.ndarray, list, tuple, float, int))
 
 
 class _BatchArray(np.ndarray):
-    """A bound field of every world; item assignment writes through to the selected worlds."""
+    """A bound NumPy read of every world; item assignment writes through to those worlds."""
 
     _field: _Field | None = None
     _index: Any = None
@@ -136,8 +121,11 @@ class _BatchArray(np.ndarray):
         return np.ndarray.__array_wrap__(self, array, context, return_scalar).view(np.ndarray)
 
 
-def _bound(field: _Field, index) -> _BatchArray:
+def _bound(field: _Field, index) -> Any:
+    """Rows `index` of `field` in every world; in NumPy an array that writes through."""
     values = field.read()[:, index]
+    if field._physics.arrays.library != "numpy":
+        return values
     array = np.array(values).view(_BatchArray)
     array._field = field
     array._index = index
@@ -148,10 +136,12 @@ class BatchBinding:
     """The fields of one MJCF element, or of a list of same-kind elements, in every world.
 
     Attribute names are those of `mjcf.Physics.bind` (`xpos`, `qpos`, `pos`, `friction`, ...).
-    A read returns a `(num_envs, ...)` array: `bind(site).xpos` is (num_envs, 3) and
-    `bind(joints).qpos` (num_envs, n_joints). Item assignment writes only the worlds of the
-    first index (`bind(joints).qpos[env_ids] = values`); attribute assignment writes every
-    world. Reads are snapshots: read again after stepping.
+    A read returns a `(num_envs, ...)` array of the batch's namespace: `bind(site).xpos` is
+    (num_envs, 3) and `bind(joints).qpos` (num_envs, n_joints). `set(name, values,
+    env_ids)` writes the worlds `env_ids` (all when None) on the device; attribute
+    assignment writes every world. In NumPy, item assignment on a read writes through to the
+    worlds of its first index (`bind(joints).qpos[env_ids] = values`). Read again after
+    stepping: a read is a snapshot.
     """
 
     def __init__(self, physics: "BatchPhysics", elements):
@@ -167,6 +157,7 @@ class BatchBinding:
             _ids=host_binding.element_id,
             _single=single,
             _label=mjcf_binding.describe(first) if single else f"[{len(elements)} {namespace}]",
+            _indices={},
         )
 
     @property
@@ -175,6 +166,9 @@ class BatchBinding:
         return self._ids
 
     def _field_and_index(self, name: str) -> tuple[_Field, Any]:
+        cached = self._indices.get(name)
+        if cached is not None:
+            return cached
         ref = self._family.fields.get(name)
         if ref is None:
             raise AttributeError(
@@ -186,18 +180,35 @@ class BatchBinding:
             index = layout.single_index(ref.addressing, int(self._ids))
         else:
             index = field_layout.compress(layout.multi_index(ref.addressing, self._ids))
-        return self._physics.field(ref.struct, ref.name), index
+        field = self._physics.field(ref.struct, ref.name)
+        if isinstance(index, np.ndarray) and self._physics.arrays.library != "numpy":
+            index = self._physics.arrays.asarray(index)
+        self._indices[name] = (field, index)
+        return field, index
 
-    def __getattr__(self, name: str) -> np.ndarray:
+    def __getattr__(self, name: str) -> Any:
         if name.startswith("__"):
             raise AttributeError(name)
         return _bound(*self._field_and_index(name))
 
-    def __setattr__(self, name: str, value) -> None:
+    def set(self, name: str, values, env_ids=None) -> None:
+        """Writes `values` into attribute `name` of worlds `env_ids` (every world if None).
+
+        Args:
+          name: an attribute, as for reads.
+          values: broadcastable to (len(env_ids), *one world's shape).
+          env_ids: an int array of the namespace (or NumPy) or None.
+
+        Raises:
+          ValueError: for a model field shared by every world.
+        """
         field, index = self._field_and_index(name)
-        current = field.read()[:, index]
-        values = np.broadcast_to(np.asarray(value), current.shape)
-        field.write(np.arange(self._physics.num_envs), index, values)
+        if env_ids is not None and _is_host(env_ids):
+            env_ids = self._physics.arrays.asarray(np.asarray(env_ids, dtype=np.int64))
+        field.write(env_ids, index, values)
+
+    def __setattr__(self, name: str, value) -> None:
+        self.set(name, value)
 
     def __repr__(self) -> str:
         return f"BatchBinding({self._label}, num_envs={self._physics.num_envs})"
@@ -229,14 +240,11 @@ class _NamedField:
             return layout.single_index(self._rule, ids[0])
         return field_layout.compress(layout.multi_index(self._rule, ids))
 
-    def __getitem__(self, key) -> np.ndarray:
+    def __getitem__(self, key) -> Any:
         return _bound(self._field, self._index(key))
 
     def __setitem__(self, key, value) -> None:
-        index = self._index(key)
-        current = self._field.read()[:, index]
-        values = np.broadcast_to(np.asarray(value), current.shape)
-        self._field.write(np.arange(self._physics.num_envs), index, values)
+        self._field.write(None, self._index(key), value)
 
 
 class _NamedStruct:
@@ -265,22 +273,38 @@ class _Struct:
         self._physics = physics
         self._struct = struct
 
-    def __getattr__(self, name: str) -> np.ndarray:
+    def __getattr__(self, name: str) -> Any:
         if name.startswith("__"):
             raise AttributeError(name)
         return self._physics.field(self._struct, name).read()
 
 
-class Contacts(NamedTuple):
-    """The active contacts of all worlds, in one list.
+class ContactWatch:
+    """Which worlds have a contact between two sets of geoms, computed on the device.
 
-    Attributes:
-      geom: int (ncon, 2), the two geoms of each contact.
-      worldid: int (ncon,), the world of each contact.
+    Made by `BatchPhysics.contact_watch`; calling it returns a bool (num_envs,) array of the
+    batch's namespace, from the contacts of the last collision pass (the contacts C MuJoCo
+    lists in `data.contact`).
     """
 
-    geom: np.ndarray
-    worldid: np.ndarray
+    def __init__(self, physics: "BatchPhysics", codes: np.ndarray):
+        wp = physics._wp
+        self._physics = physics
+        self._codes = wp.array(codes.astype(np.int32), dtype=wp.int32, device=physics.device)
+        self._out, self._view = physics.arrays.empty((physics.num_envs,), bool)
+
+    def __call__(self) -> Any:
+        physics = self._physics
+        contact = physics.warp_data.contact
+        self._out.zero_()
+        physics._wp.launch(
+            kernels.kernels().contact_worlds,
+            dim=contact.worldid.shape[0],
+            inputs=[physics.warp_data.nacon, contact.geom, contact.worldid, self._codes],
+            outputs=[self._out],
+            device=physics.device,
+        )
+        return self._view
 
 
 class BatchPhysics:
@@ -290,15 +314,17 @@ class BatchPhysics:
       host: the `mjcf.Physics` the model was compiled into; its model is put on the device and
         its data is every world's initial state. It also resolves MJCF elements for `bind`.
       num_envs: the number of worlds, >= 1.
-      device: a Warp device name, "cpu" or "cuda:0".
+      arrays: the `ArrayBridge` (device and namespace) of the batch.
       batched_model_fields: MjModel field names that get one row per world (per-world
         friction, masses, colours, gains, site positions).
       nconmax, njmax: contact and constraint capacity per world, passed to `put_data`
         (None: MuJoCo Warp's defaults).
 
+    Attributes:
+      xp: the array namespace of every read (NumPy on Warp's CPU device, torch on CUDA).
+
     Raises:
-      ValueError: for a bad `num_envs`, or a field in `batched_model_fields` that MuJoCo Warp
-        does not batch.
+      ValueError: for a field in `batched_model_fields` that MuJoCo Warp does not batch.
     """
 
     def __init__(
@@ -306,7 +332,7 @@ class BatchPhysics:
         host: mjcf.Physics,
         num_envs: int,
         *,
-        device: str = "cpu",
+        arrays: ArrayBridge,
         batched_model_fields: Sequence[str] = (),
         nconmax: int | None = None,
         njmax: int | None = None,
@@ -316,10 +342,12 @@ class BatchPhysics:
         self._mjw = mjw
         self.host = host
         self.num_envs = int(num_envs)
+        self.arrays = arrays
+        self.xp = arrays.xp
         self.mj_model: mujoco.MjModel = host.model.ptr
         self.layout = field_layout.ModelLayout(self.mj_model)
         self.batched_model_fields = frozenset(batched_model_fields)
-        self.device = warp.get_device(device)
+        self.device = arrays.device
         self.is_cuda = self.device.is_cuda
         batchable = {
             f.name for f in dataclasses.fields(mjw.Model) if _spec_shape(f.type)[:1] == ("*",)
@@ -337,8 +365,16 @@ class BatchPhysics:
             self.warp_data = mjw.put_data(
                 self.mj_model, host.data.ptr, nworld=self.num_envs, nconmax=nconmax, njmax=njmax
             )
+            # Forward for some worlds runs in this copy, whose chosen worlds are copied back.
+            self._scratch = mjw.put_data(
+                self.mj_model, host.data.ptr, nworld=self.num_envs, nconmax=nconmax, njmax=njmax
+            )
+            self.state_size = mujoco.mj_stateSize(self.mj_model, _STATE_SPEC)
+            self._states = warp.zeros((self.num_envs, self.state_size), dtype=warp.float32)
         self._fields: dict[tuple[str, str], _Field] = {}
-        self._world_arrays = self._per_world_arrays()
+        self._world_arrays = list(
+            zip(_per_world_arrays(warp, self._scratch), _per_world_arrays(warp, self.warp_data))
+        )
         self._acc_sensors = self._acc_sensor_mask()
         self._saved_sensordata = None
         self._graphs: dict[int, Any] = {}
@@ -354,7 +390,10 @@ class BatchPhysics:
         field = self._fields.get(key)
         if field is None:
             host = self.mj_model if struct == field_layout.MODEL else self.host.data.ptr
-            if not isinstance(getattr(host, name, None), np.ndarray):
+            value = getattr(host, name, None)
+            # A per-world scalar such as data.time is a (num_envs,) array.
+            scalar = struct == field_layout.DATA and isinstance(value, float)
+            if not (isinstance(value, np.ndarray) or scalar):
                 raise AttributeError(f"MuJoCo has no array {struct} field {name!r}")
             field = self._fields[key] = _Field(self, struct, name)
         return field
@@ -371,29 +410,15 @@ class BatchPhysics:
         """
         return BatchBinding(self, elements)
 
-    def contacts(self) -> Contacts:
-        """The contacts found by the last collision pass of every world."""
-        contact = self.warp_data.contact
-        count = int(self.warp_data.nacon.numpy()[0])
-        return Contacts(contact.geom.numpy()[:count], contact.worldid.numpy()[:count])
+    def contact_watch(self, first_geoms: np.ndarray, second_geoms: np.ndarray) -> ContactWatch:
+        """A `ContactWatch` for contacts between a geom of `first_geoms` and one of
+        `second_geoms` (two bool masks over the compiled geoms)."""
+        codes = np.asarray(first_geoms, dtype=np.int32) | (
+            2 * np.asarray(second_geoms, dtype=np.int32)
+        )
+        return ContactWatch(self, codes)
 
     # Simulation.
-
-    def _per_world_arrays(self) -> list:
-        """Every Warp array of the data with one row per world, from MuJoCo Warp's own specs."""
-        arrays = []
-
-        def collect(struct):
-            for f in dataclasses.fields(struct):
-                value = getattr(struct, f.name, None)
-                if dataclasses.is_dataclass(value):
-                    collect(value)
-                elif isinstance(value, self._wp.array) and _spec_shape(f.type)[:1] == ("nworld",):
-                    if value.size and value.is_contiguous:
-                        arrays.append(value)
-
-        collect(self.warp_data)
-        return arrays
 
     def _acc_sensor_mask(self):
         model = self.mj_model
@@ -445,55 +470,69 @@ class BatchPhysics:
             graph = self._graphs[n_sub_steps] = capture.graph
         wp.capture_launch(graph)
 
-    def forward(self, env_ids: np.ndarray | None = None, *, actuation: bool = True) -> None:
-        """Recomputes derived quantities of worlds `env_ids` (all when None), as `mj_forward`.
+    def forward(self, mask=None, *, actuation: bool = True) -> None:
+        """Recomputes derived quantities of the worlds of `mask`, as `mj_forward`.
 
-        Other worlds are left exactly as they were: MuJoCo Warp computes every world, so their
-        per-world arrays are saved before and put back after.
+        Other worlds are left exactly as they were: the chosen worlds' states are copied
+        into a second MuJoCo Warp data, forward runs there, and only the chosen worlds are
+        copied back (one kernel per per-world array, on the device).
 
         Args:
-          env_ids: world indices, or None for all worlds.
+          mask: a bool (num_envs,) array (of the namespace, NumPy or Warp), or None for
+            every world.
           actuation: False runs forward with actuation disabled, as after a reset in
             `mjcf.Physics.reset_context`.
         """
         wp, mjw = self._wp, self._mjw
-        keep = None
-        if env_ids is not None:
-            mask = np.zeros(self.num_envs, dtype=bool)
-            mask[np.asarray(env_ids, dtype=np.intp)] = True
-            if not mask.all():
-                keep = wp.array(~mask, dtype=wp.bool, device=self.device)
-        saved = [wp.clone(array) for array in self._world_arrays] if keep is not None else ()
-        option = self.warp_model.opt
+        model = self.warp_model
+        option = model.opt
         flags = option.disableflags
         if not actuation:
             option.disableflags = flags | int(mujoco.mjtDisableBit.mjDSBL_ACTUATION)
         try:
             with wp.ScopedDevice(self.device):
-                mjw.forward(self.warp_model, self.warp_data)
+                if mask is None:
+                    mjw.forward(model, self.warp_data)
+                    return
+                active = self.warp_mask(mask)
+                mjw.get_state(model, self.warp_data, self._states, _STATE_SPEC)
+                mjw.set_state(model, self._scratch, self._states, _STATE_SPEC, active)
+                mjw.forward(model, self._scratch)
+                for source, target in self._world_arrays:
+                    _copy_worlds(active, source, target)
         finally:
             option.disableflags = flags
-        for source, target in zip(saved, self._world_arrays):
-            _copy_worlds(keep, source, target)
 
-    def set_state(self, env_ids: np.ndarray, states: np.ndarray, spec: int) -> None:
-        """Writes `mj_getState` vectors `states` (one row per id) into worlds `env_ids`."""
+    def warp_mask(self, mask):
+        """A bool (num_envs,) mask (of the namespace, NumPy, or Warp) as a Warp array."""
         wp = self._wp
-        full = np.zeros((self.num_envs, states.shape[1]), dtype=np.float32)
-        full[env_ids] = states
-        mask = np.zeros(self.num_envs, dtype=bool)
-        mask[env_ids] = True
-        with wp.ScopedDevice(self.device):
-            self._mjw.set_state(
-                self.warp_model,
-                self.warp_data,
-                wp.array(full, dtype=wp.float32),
-                int(spec),
-                wp.array(mask, dtype=wp.bool),
-            )
+        if isinstance(mask, wp.array):
+            return mask
+        if array_library(mask) == "torch":
+            return self.arrays.to_warp(mask, dtype=wp.bool)
+        mask = np.ascontiguousarray(mask, dtype=bool)
+        return wp.array(mask, dtype=wp.bool, device=self.device, copy=self.is_cuda)
+
+
+def _per_world_arrays(wp, data) -> list:
+    """Every Warp array of `data` with one row per world, from MuJoCo Warp's own specs."""
+    arrays = []
+
+    def collect(struct):
+        for f in dataclasses.fields(struct):
+            value = getattr(struct, f.name, None)
+            if dataclasses.is_dataclass(value):
+                collect(value)
+            elif isinstance(value, wp.array) and _spec_shape(f.type)[:1] == ("nworld",):
+                if value.size and value.is_contiguous:
+                    arrays.append(value)
+
+    collect(data)
+    return arrays
 
 
 def _copy_worlds(keep, source, target) -> None:
+    """Copies the worlds where `keep` is true from `source` to `target` (same shapes)."""
     wp = _warp.load()[0]
     source_bytes = kernels.rows(source, wp.uint8, source.shape[0])
     target_bytes = kernels.rows(target, wp.uint8, target.shape[0])

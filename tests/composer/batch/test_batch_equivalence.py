@@ -95,49 +95,36 @@ def test_every_world_matches_its_cpu_environment_for_20_control_steps(name):
 
 
 class _EndsAfter(Reach):
-    """reach_site whose episodes end after `limit` control steps (the CPU side)."""
+    """reach_site whose episodes end after `limit` control steps (the CPU side), read from
+    the simulated time (half a physics step below the limit's time, as float32 reaches it)."""
 
     def __init__(self, limit: int):
         super().__init__(observation_settings.FEATURES)
         self.limit = limit
-        self._count = 0
-
-    def initialize_episode(self, physics, random_state) -> None:
-        super().initialize_episode(physics, random_state)
-        self._count = 0
-
-    def before_step(self, physics, action, random_state) -> None:
-        super().before_step(physics, action, random_state)
-        self._count += 1
 
     def should_terminate_episode(self, physics) -> bool:
-        return self._count >= self.limit
+        return physics.data.time >= self.limit * self.control_timestep - 0.5 * self.physics_timestep
 
 
 class _BatchEndsAfter(manipulation_batch.BatchReach):
-    """The batched twin: world i's episodes end after limits[i] control steps."""
+    """The batched twin: world i's episodes end after limits[i] control steps, read from
+    each world's simulated time (which the initial state sets back to 0)."""
 
     def __init__(self, task, limits):
         super().__init__(task)
-        self._limits = np.asarray(limits)
-        self._counts = np.zeros(len(limits), dtype=int)
+        self._end_times = np.asarray(limits) * task.control_timestep - 0.5 * task.physics_timestep
 
-    def initialize_episode(self, physics, env_ids, random_states) -> None:
-        super().initialize_episode(physics, env_ids, random_states)
-        self._counts[env_ids] = 0
-
-    def before_step(self, physics, action) -> None:
-        super().before_step(physics, action)
-        self._counts += 1
-
-    def should_terminate_episode(self, physics) -> np.ndarray:
-        return self._counts >= self._limits
+    def should_terminate_episode(self, physics):
+        return physics.data.time >= self._end_times
 
 
 def test_each_world_ends_and_restarts_its_episode_on_its_own():
     limits = (2, 3, 5, 100)
     batch_task = _BatchEndsAfter(_EndsAfter(limit=0), limits)
-    batch_env = BatchEnvironment(batch_task, NUM_ENVS, random_states=SEEDS)
+    # World 0 starts 3 episodes in the 8 steps before the first refill: 4 slots hold them.
+    batch_env = BatchEnvironment(
+        batch_task, NUM_ENVS, random_states=SEEDS, device="cpu", slots_per_world=4
+    )
     cpu_envs = [
         composer.Environment(_EndsAfter(limit), random_state=s) for limit, s in zip(limits, SEEDS)
     ]
@@ -158,6 +145,7 @@ def test_each_world_ends_and_restarts_its_episode_on_its_own():
     assert [row[0] for row in step_types] == [mid, last, first, mid, last, first, mid, last]
     assert [row[1] for row in step_types] == [mid, mid, last, first, mid, mid, last, first]
     assert [row[3] for row in step_types] == [mid] * 8
+    assert batch_env.initial_state_stats().reused == 0
 
 
 def test_lift_reward_matches_the_cpu_task_when_the_hand_holds_the_brick_up():

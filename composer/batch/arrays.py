@@ -1,0 +1,159 @@
+"""The array namespace batched task code runs in, and what a batch hands its caller.
+
+Everything a batch computes lives on its Warp device. Task code (rewards, discounts,
+terminations, observables, controls) reads MuJoCo Warp's arrays through views that share
+their memory, in one array namespace of the Python array API standard (`array_api_compat`):
+
+| device          | array_type       | namespace of task code                           |
+|-----------------|------------------|--------------------------------------------------|
+| Warp's CPU      | anything but torch | NumPy: views of the Warp arrays (`__array_interface__`) |
+| Warp's CPU      | "torch"          | torch CPU tensors (`warp.to_torch`)              |
+| CUDA            | any              | torch CUDA tensors (`warp.to_torch`)             |
+
+What `reset` and `step` hand out is converted from that namespace without a copy, except
+for `array_type="numpy"` on CUDA, which copies to the host:
+
+| array_type | the caller gets                                  |
+|------------|--------------------------------------------------|
+| "numpy"    | NumPy arrays                                     |
+| "warp"     | `warp.array`s on the batch's device              |
+| "torch"    | `torch.Tensor`s on the batch's device            |
+| "jax"      | `jax.Array`s on the batch's device (DLPack)      |
+
+Each step's results are new arrays: a result the caller keeps is never overwritten by a
+later step. torch and JAX are imported only when used, and are not dependencies of `[warp]`.
+"""
+
+from types import ModuleType
+from typing import Any
+
+import numpy as np
+
+__all__ = ["ARRAY_TYPES", "ArrayBridge", "array_library", "check_array_type"]
+
+#: The values of `BatchEnvironment(array_type=...)`.
+ARRAY_TYPES = ("numpy", "warp", "torch", "jax")
+
+# The top-level module of an array's type -> the library `array_library` names.
+_LIBRARIES = {"warp": "warp", "torch": "torch", "jax": "jax", "jaxlib": "jax"}
+
+
+def array_library(values) -> str:
+    """'warp', 'torch' or 'jax' for an array of that library (none is imported), else ''."""
+    return _LIBRARIES.get(type(values).__module__.split(".", 1)[0], "")
+
+
+def check_array_type(array_type: str) -> str:
+    """Returns `array_type` if it is one of `ARRAY_TYPES`; raises ValueError naming it."""
+    if array_type not in ARRAY_TYPES:
+        raise ValueError(f"array_type: expected one of {list(ARRAY_TYPES)}, got {array_type!r}")
+    return array_type
+
+
+def _import(name: str, purpose: str) -> ModuleType:
+    try:
+        return __import__(name)
+    except ImportError as error:
+        raise ImportError(f"{purpose} needs {name} installed ({error})") from error
+
+
+class ArrayBridge:
+    """Views of Warp arrays in the task namespace `xp`, and conversions out of it.
+
+    Args:
+      warp: the `warp` module.
+      device: the Warp device of the batch.
+      array_type: one of `ARRAY_TYPES`: what `hand_out` converts to.
+
+    Attributes:
+      xp: the array-API namespace of task code (`array_api_compat.numpy` or `.torch`).
+      library: "numpy" or "torch", the library behind `xp`.
+      xp_device: the batch's device as `xp` names it (for `xp.zeros(..., device=)`).
+
+    Raises:
+      ImportError: when torch (needed on CUDA or for array_type "torch") or JAX (for
+        array_type "jax") is missing; the message names it.
+    """
+
+    def __init__(self, warp, device, array_type: str):
+        import array_api_compat
+
+        self._wp = warp
+        self.device = device
+        self.array_type = check_array_type(array_type)
+        self.library = "torch" if device.is_cuda or array_type == "torch" else "numpy"
+        if self.library == "torch":
+            purpose = "batched task code on CUDA" if device.is_cuda else "array_type='torch'"
+            self._torch = _import("torch", purpose)
+            self.xp = array_api_compat.array_namespace(self._torch.zeros(0))
+            self.xp_device = self._torch.device(str(device))
+        else:
+            self.xp = array_api_compat.array_namespace(np.zeros(0))
+            self.xp_device = "cpu"
+        if array_type == "jax":
+            _import("jax", "array_type='jax'")
+
+    # Warp -> namespace.
+
+    def view(self, array, shape: tuple[int, ...]) -> Any:
+        """The contiguous Warp `array` as an `xp` array of `shape`, sharing its memory."""
+        if self.library == "torch":
+            return self._wp.to_torch(array).reshape(shape)
+        return array.numpy().reshape(shape)
+
+    def empty(self, shape: tuple[int, ...], dtype) -> tuple[Any, Any]:
+        """A new Warp array on the device and its `xp` view: `(warp_array, view)`."""
+        array = self._wp.zeros(
+            shape, dtype=self._wp.dtype_from_numpy(np.dtype(dtype)), device=self.device
+        )
+        return array, self.view(array, shape)
+
+    def asarray(self, values, dtype=None) -> Any:
+        """Host or device `values` as an `xp` array on the device (host values: one copy)."""
+        if self.library == "torch":
+            torch = self._torch
+            if array_library(values) == "warp":
+                values = self._wp.to_torch(values)
+            tensor = torch.as_tensor(values, device=str(self.device))
+            return tensor if dtype is None else tensor.to(_torch_dtype(torch, dtype))
+        if array_library(values) == "warp":
+            values = values.numpy()
+        return np.asarray(values, dtype=dtype)
+
+    # Namespace -> Warp.
+
+    def to_warp(self, values, dtype=None) -> Any:
+        """An `xp` array as a Warp array sharing its memory (contiguous arrays only)."""
+        wp = self._wp
+        if self.library == "torch":
+            return wp.from_torch(values.contiguous(), dtype=dtype)
+        values = np.ascontiguousarray(values)
+        if dtype is None:
+            dtype = wp.dtype_from_numpy(values.dtype)
+        return wp.array(values, dtype=dtype, device=self.device, copy=False)
+
+    # Namespace -> the caller.
+
+    def hand_out(self, values) -> Any:
+        """An `xp` array as `array_type` (see the module docstring)."""
+        kind = self.array_type
+        if kind == "numpy":
+            if self.library == "torch":
+                return values.cpu().numpy()
+            return np.asarray(values)
+        if kind == "torch":
+            if self.library == "torch":
+                return values
+            return _import("torch", "array_type='torch'").from_numpy(np.asarray(values))
+        array = self.to_warp(values)
+        return self._wp.to_jax(array) if kind == "jax" else array
+
+    def to_host(self, values) -> np.ndarray:
+        """An `xp` array as a NumPy array (a device-to-host copy on CUDA)."""
+        if self.library == "torch":
+            return values.detach().cpu().numpy()
+        return np.asarray(values)
+
+
+def _torch_dtype(torch, dtype):
+    return getattr(torch, np.dtype(dtype).name) if np.dtype(dtype) != bool else torch.bool

@@ -1,0 +1,274 @@
+"""Initial states of a batch's episodes, drawn by the CPU task's own initializers off the
+caller's thread.
+
+A `StateMaker` runs the CPU task's `initialize_episode` hooks (task and entities) on a host
+`mjcf.Physics`, inside its `reset_context`, with one world's random generator, and records
+what a world needs to start that episode: the physics state (`mjSTATE_INTEGRATION`), the
+rows of the batched model fields, and the `BatchTask`'s `initial_values`. The distribution of
+initial states is therefore the CPU task's by construction.
+
+A `StateProducer` runs makers on worker threads (one maker each) or worker processes (each
+builds its own task from a picklable `task_factory`). A job is one world's next episodes,
+drawn in order from that world's generator, which travels with the job and comes back
+advanced, so a seed fixes every world's episodes whatever the number of workers.
+"""
+
+import concurrent.futures
+import multiprocessing
+import threading
+from collections.abc import Callable, Sequence
+from typing import Any, NamedTuple
+
+import mujoco
+import numpy as np
+
+import composer
+import mjcf
+from composer.hooks import EnvironmentHooks
+
+__all__ = ["InitialState", "Job", "JobResult", "StateMaker", "StateProducer"]
+
+_STATE_SPEC = mujoco.mjtState.mjSTATE_INTEGRATION
+
+
+class InitialState(NamedTuple):
+    """What one world needs to start one episode.
+
+    Attributes:
+      state: the `mj_getState(mjSTATE_INTEGRATION)` vector, float64.
+      model_rows: the world's row of each batched model field, by field name.
+      values: the `BatchTask.initial_values` of the episode, by name.
+      shared: model fields outside the batched ones that the initializers changed the same
+        way for every world (such as the flag MuJoCo clears when a site moves off its
+        body's frame), with their values.
+    """
+
+    state: np.ndarray
+    model_rows: dict[str, np.ndarray]
+    values: dict[str, np.ndarray]
+    shared: dict[str, np.ndarray]
+
+
+class Job(NamedTuple):
+    """Make the initial states of `episodes` of world `world` from `random_state`."""
+
+    world: int
+    episodes: tuple[int, ...]
+    random_state: np.random.RandomState
+
+
+class JobResult(NamedTuple):
+    """The states of a `Job`, and its world's generator after drawing them."""
+
+    world: int
+    episodes: tuple[int, ...]
+    states: list[InitialState]
+    random_state: np.random.RandomState
+
+
+def _model_arrays(model: mujoco.MjModel) -> dict[str, np.ndarray]:
+    return {
+        name: value.copy()
+        for name in dir(model)
+        if not name.startswith("_") and isinstance(value := getattr(model, name), np.ndarray)
+    }
+
+
+class StateMaker:
+    """Makes initial states with the CPU task of `batch_task` on the host `physics`.
+
+    Args:
+      batch_task: the `BatchTask`; its `task` is the CPU task whose hooks run, and its
+        `episode_values` are recorded.
+      physics: the host `mjcf.Physics` of that task, after its `after_compile` hooks ran.
+      model_fields: the batched model fields whose rows are recorded (and restored to the
+        compiled values before every episode, as a fresh world has them).
+
+    Raises:
+      RuntimeError (from a call): if a hook changed the MJCF model (that needs a recompile),
+        or changed a model field outside `model_fields` differently from the first episode.
+    """
+
+    def __init__(self, batch_task, physics: mjcf.Physics, model_fields: Sequence[str]):
+        self._batch_task = batch_task
+        self._hooks = EnvironmentHooks(batch_task.task)
+        self._physics = physics
+        model = physics.model.ptr
+        self._pristine = {name: getattr(model, name).copy() for name in model_fields}
+        self._reference = _model_arrays(model)
+        self._shared: dict[str, np.ndarray] | None = None
+
+    def __call__(self, random_state: np.random.RandomState) -> InitialState:
+        """Runs the initializers with `random_state` and records the state they set."""
+        physics = self._physics
+        model, data = physics.model.ptr, physics.data.ptr
+        task = self._batch_task.task
+        root = task.root_entity.mjcf_model
+        count = root.modification_count
+        for name, value in self._pristine.items():
+            getattr(model, name)[...] = value
+        with physics.reset_context():
+            self._hooks.initialize_episode(physics, random_state)
+        if root.modification_count != count:
+            raise RuntimeError(
+                f"{type(task).__name__}.initialize_episode changed the MJCF model; a batch "
+                "compiles its model once (MJCF variations are refused)"
+            )
+        state = np.empty(mujoco.mj_stateSize(model, _STATE_SPEC))
+        mujoco.mj_getState(model, data, state, _STATE_SPEC)
+        if self._shared is None:
+            # Comparing every model array costs about a millisecond: once per maker.
+            self._shared = {
+                name: getattr(model, name).copy()
+                for name, value in self._reference.items()
+                if name not in self._pristine
+                and not np.array_equal(getattr(model, name), value, equal_nan=True)
+            }
+        for name, value in self._shared.items():
+            if not np.array_equal(getattr(model, name), value, equal_nan=True):
+                raise RuntimeError(
+                    f"initialize_episode changed model field {name!r} differently per world, "
+                    f"but all worlds share it; declare it in batched_model_fields=({name!r},) "
+                    "to give each world its own"
+                )
+        return InitialState(
+            state=state,
+            model_rows={name: getattr(model, name).copy() for name in self._pristine},
+            values={
+                name: np.asarray(value, dtype=np.float32)
+                for name, value in self._batch_task.initial_values().items()
+            },
+            shared=self._shared,
+        )
+
+    def run(self, job: Job) -> JobResult:
+        """The states of every episode of `job`, in order."""
+        states = [self(job.random_state) for _ in job.episodes]
+        return JobResult(job.world, job.episodes, states, job.random_state)
+
+
+def build_maker(
+    task_factory: Callable[[], composer.Task], batch_task_type: type, model_fields: Sequence[str]
+) -> StateMaker:
+    """A `StateMaker` over a new task from `task_factory`, compiled on its own physics."""
+    task = task_factory()
+    physics = mjcf.Physics.from_mjcf_model(task.root_entity.mjcf_model)
+    with physics.reset_context():
+        EnvironmentHooks(task).after_compile(physics, np.random.RandomState(0))
+    return StateMaker(batch_task_type(task), physics, model_fields)
+
+
+# The maker of a worker process (one per process).
+_process_maker: StateMaker | None = None
+
+
+def _start_process(task_factory, batch_task_type, model_fields) -> None:
+    global _process_maker
+    _process_maker = build_maker(task_factory, batch_task_type, model_fields)
+
+
+def _run_in_process(jobs: list[Job]) -> list[JobResult]:
+    return [_process_maker.run(job) for job in jobs]
+
+
+class StateProducer:
+    """Runs jobs on `workers` threads or processes, off the caller's thread.
+
+    Args:
+      maker: the `StateMaker` of the batch's own task; used by a single thread worker when
+        there is no `task_factory`.
+      workers: the number of workers (>= 1).
+      processes: run workers in processes (each builds its task with `task_factory`; their
+        throughput scales with the host's cores) instead of threads.
+      task_factory: a picklable callable returning a new CPU task of the same kind; needed
+        for more than one worker or for processes.
+      batch_task_type, model_fields: what each worker's `StateMaker` is built with.
+
+    Raises:
+      ValueError: for more than one worker, or processes, without a `task_factory`.
+    """
+
+    def __init__(
+        self,
+        maker: StateMaker,
+        *,
+        workers: int = 1,
+        processes: bool = False,
+        task_factory: Callable[[], composer.Task] | None = None,
+        batch_task_type: type | None = None,
+        model_fields: Sequence[str] = (),
+    ):
+        if task_factory is None and (workers > 1 or processes):
+            raise ValueError(
+                f"state_workers={workers}, processes={processes}: more than one producer, or "
+                "producers in processes, need task_factory (a picklable callable returning "
+                "the CPU task) to build their own task"
+            )
+        self.workers = workers
+        if processes:
+            self._pool = concurrent.futures.ProcessPoolExecutor(
+                workers,
+                mp_context=multiprocessing.get_context("spawn"),
+                initializer=_start_process,
+                initargs=(task_factory, batch_task_type, tuple(model_fields)),
+            )
+            self._run = _run_in_process
+        else:
+            makers = [maker]
+            if task_factory is not None:
+                makers = [
+                    build_maker(task_factory, batch_task_type, model_fields) for _ in range(workers)
+                ]
+            free = list(makers)
+            lock = threading.Lock()
+
+            def run(jobs: list[Job]) -> list[JobResult]:
+                with lock:
+                    own = free.pop()
+                try:
+                    return [own.run(job) for job in jobs]
+                finally:
+                    with lock:
+                        free.append(own)
+
+            self._pool = concurrent.futures.ThreadPoolExecutor(
+                workers, thread_name_prefix="composer-initial-states"
+            )
+            self._run = run
+
+    def submit(self, jobs: Sequence[Job]) -> "concurrent.futures.Future[list[JobResult]]":
+        """Starts `jobs` on the workers; the future's result lists every job's result.
+
+        Jobs are split into one share per worker; a world's episodes stay in one job.
+        """
+        shares = [list(jobs[i :: self.workers]) for i in range(self.workers)]
+        futures = [self._pool.submit(self._run, share) for share in shares if share]
+        return _gathered(futures)
+
+    def close(self) -> None:
+        """Stops the workers (pending jobs are cancelled)."""
+        self._pool.shutdown(wait=True, cancel_futures=True)
+
+
+def _gathered(futures: list) -> "concurrent.futures.Future[list[JobResult]]":
+    """One future for the concatenated results of `futures`."""
+    out: concurrent.futures.Future[Any] = concurrent.futures.Future()
+    if not futures:
+        out.set_result([])
+        return out
+    remaining = [len(futures)]
+    lock = threading.Lock()
+
+    def done(_):
+        with lock:
+            remaining[0] -= 1
+            if remaining[0]:
+                return
+        try:
+            out.set_result([result for f in futures for result in f.result()])
+        except BaseException as error:  # the workers' error, raised where the result is read
+            out.set_exception(error)
+
+    for future in futures:
+        future.add_done_callback(done)
+    return out

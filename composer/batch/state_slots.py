@@ -1,0 +1,314 @@
+"""Each world's next initial states, waiting on the device; applied to chosen worlds at once.
+
+Every world has `slots_per_world` slots on the device; its episode e starts from slot
+e % slots_per_world. A reset of the worlds of a mask is a few kernel launches on the
+device: copy each chosen world's slot into its state (`mujoco_warp.set_state` with the mask),
+its batched model rows and its episode values, and count the episode. The host never learns
+which worlds reset at that step.
+
+Refilling (the one rule for producers): a reset of every world (`refill(wait=True)`) fills
+every slot of every world and waits for it. After that, every `refill_interval` control
+steps the host reads how many episodes each world has started (one (2, num_envs) int32
+device-to-host copy), uploads the states its producers finished (waiting for them if they
+are not done: the caller waits rather than change the distribution), and asks the producers
+for the states that fill the slots freed since; at other steps, states the producers have
+finished are uploaded without waiting (host to device only). A world that starts an episode
+whose state is not uploaded yet starts it from the state in its slot, the one it used
+`slots_per_world` episodes before: the device counts each such reuse exactly
+(`StateSlots.stats`), and the first one is warned about. Worlds whose episodes last at
+least `refill_interval` steps never reuse a state when the producers keep up.
+"""
+
+import time
+import warnings
+from collections.abc import Sequence
+from typing import NamedTuple
+
+import mujoco
+import numpy as np
+
+from composer.batch import _warp, kernels
+from composer.batch.initial_states import Job, JobResult, StateProducer
+
+__all__ = ["InitialStateStats", "StateSlots"]
+
+_STATE_SPEC = int(mujoco.mjtState.mjSTATE_INTEGRATION)
+
+#: How long a refill waits for the producers before it gives up (seconds).
+PRODUCER_TIMEOUT = 600.0
+
+
+class InitialStateStats(NamedTuple):
+    """How the producers kept up.
+
+    Attributes:
+      started: episodes started, all worlds together.
+      reused: episodes that started from a state their world had used before, because the
+        producers' states had not been uploaded yet (see the module docstring).
+      waits: refills at which the caller waited for the producers.
+      wait_seconds: the time the caller spent waiting.
+    """
+
+    started: int
+    reused: int
+    waits: int
+    wait_seconds: float
+
+
+class StateSlots:
+    """The device slots of `physics`' worlds, filled by `producer`.
+
+    Args:
+      physics: the `BatchPhysics` whose worlds start from the slots.
+      producer: the `StateProducer` that makes the states.
+      random_states: each world's generator (the list is updated in place as jobs return).
+      model_fields: the batched model fields that a state sets.
+      slots_per_world: states waiting on the device per world (>= 1).
+      refill_interval: control steps between two refills (>= 1).
+
+    Attributes:
+      values: the current episode's `BatchTask.initial_values` of every world, by name,
+        arrays of the batch's namespace of shape (num_envs, *value shape).
+    """
+
+    def __init__(
+        self,
+        physics,
+        producer: StateProducer,
+        random_states: list,
+        *,
+        model_fields: Sequence[str],
+        slots_per_world: int = 2,
+        refill_interval: int = 8,
+    ):
+        wp = _warp.load()[0]
+        self._wp = wp
+        self._physics = physics
+        self._producer = producer
+        self.random_states = random_states
+        self._model_fields = tuple(model_fields)
+        self.slots_per_world = int(slots_per_world)
+        self.refill_interval = int(refill_interval)
+        n, k = physics.num_envs, self.slots_per_world
+        device = physics.device
+        # Row 0: episodes each world has started; row 1: of those, how many reused a state.
+        self._counters = wp.zeros((2, n), dtype=wp.int32, device=device)
+        self._uploaded_on_device = wp.zeros(n, dtype=wp.int32, device=device)
+        self._chosen = wp.zeros((n, physics.state_size), dtype=wp.float32, device=device)
+        self._slot_states = self._host_backed((n * k, physics.state_size))
+        self._slot_rows = {}
+        self._row_targets = {}
+        for name in self._model_fields:
+            field = physics.field("model", name)
+            if _scalar(field.device_array.dtype) is not wp.float32:
+                raise ValueError(
+                    f"batched_model_fields: {name!r} is not a float field on the device; an "
+                    "initial state can only set float model fields"
+                )
+            size = int(np.prod(field.c_shape))
+            self._slot_rows[name] = self._host_backed((n * k, size))
+            self._row_targets[name] = kernels.rows(field.device_array, wp.float32, n)
+        self._slot_values: dict = {}
+        self._value_targets: dict = {}
+        self.values: dict = {}
+        self._pending = None
+        self._shared_written: dict[str, np.ndarray] | None = None
+        self._warned = False
+        self._steps = 0
+        self._clear_bookkeeping()
+        self._stats = InitialStateStats(0, 0, 0, 0.0)
+
+    def _host_backed(self, shape):
+        """(device array, host array): the same memory on the CPU device, a mirror on CUDA."""
+        wp = self._wp
+        array = wp.zeros(shape, dtype=wp.float32, device=self._physics.device)
+        host = np.zeros(shape, np.float32) if self._physics.is_cuda else array.numpy()
+        return array, host
+
+    def _clear_bookkeeping(self) -> None:
+        n = self._physics.num_envs
+        self._uploaded = np.zeros(n, np.int64)  # episodes below this are on the device
+        self._requested = np.zeros(n, np.int64)  # episodes below this were asked for
+
+    @property
+    def stats(self) -> InitialStateStats:
+        """The producers' `InitialStateStats` since the last `restart`."""
+        return self._stats
+
+    def restart(self, random_states: list) -> None:
+        """Drops every prepared state and starts the worlds' streams anew from
+        `random_states` (after a reseed)."""
+        self._drop_pending()
+        self.random_states[:] = random_states
+        self._counters.zero_()
+        self._uploaded_on_device.zero_()
+        self._clear_bookkeeping()
+        self._stats = InitialStateStats(0, 0, 0, 0.0)
+
+    def _drop_pending(self) -> None:
+        if self._pending is not None:
+            try:
+                self._pending.result(PRODUCER_TIMEOUT)
+            finally:
+                self._pending = None
+
+    # Applying.
+
+    def apply(self, mask) -> None:
+        """Starts the next episode of the worlds of `mask` (a Warp bool array)."""
+        wp, physics = self._wp, self._physics
+        k = self.slots_per_world
+        take = kernels.kernels().take_slots
+        n = physics.num_envs
+
+        def launch(slots, target):
+            wp.launch(
+                take,
+                dim=target.shape,
+                inputs=[mask, self._counters, k, slots, target],
+                device=physics.device,
+            )
+
+        launch(self._slot_states[0], self._chosen)
+        with wp.ScopedDevice(physics.device):
+            physics._mjw.set_state(
+                physics.warp_model, physics.warp_data, self._chosen, _STATE_SPEC, mask
+            )
+        for name, target in self._row_targets.items():
+            launch(self._slot_rows[name][0], target)
+        for name, target in self._value_targets.items():
+            launch(self._slot_values[name][0], target)
+        wp.launch(
+            kernels.kernels().count_episodes,
+            dim=n,
+            inputs=[mask, self._uploaded_on_device, self._counters],
+            device=physics.device,
+        )
+
+    # Refilling.
+
+    def after_step(self) -> None:
+        """Counts a control step: uploads finished states, and refills every
+        `refill_interval` steps."""
+        self._steps += 1
+        if self._steps >= self.refill_interval:
+            self.refill(wait=False)
+        elif self._pending is not None and self._pending.done():
+            self._collect()
+
+    def refill(self, *, wait: bool) -> None:
+        """Uploads finished states and asks for the ones freed since the last refill.
+
+        Args:
+          wait: fill every slot of every world before returning (a reset of every world
+            needs its next episode; the producers then have nothing left to catch up).
+        """
+        self._steps = 0
+        started, reused = self._counters.numpy().astype(np.int64)
+        self._collect()
+        jobs = self._jobs(started, started + self.slots_per_world)
+        if jobs:
+            self._pending = self._producer.submit(jobs)
+            if wait:
+                self._collect()
+        total = int(reused.sum())
+        self._stats = self._stats._replace(started=int(started.sum()), reused=total)
+        if total and not self._warned:
+            self._warned = True
+            warnings.warn(
+                f"{total} episodes started from an initial state their world had used before: "
+                "the worlds reset faster than the states were refilled; give more "
+                "slots_per_world, a smaller refill_interval or more state_workers "
+                "(BatchEnvironment.initial_state_stats() counts them)",
+                RuntimeWarning,
+                stacklevel=4,
+            )
+
+    def _jobs(self, started: np.ndarray, end: np.ndarray) -> list[Job]:
+        jobs = []
+        for world in np.flatnonzero(np.maximum(self._requested, started) < end):
+            first = max(int(self._requested[world]), int(started[world]))
+            episodes = tuple(range(first, int(end[world])))
+            jobs.append(Job(int(world), episodes, self.random_states[world]))
+            self._requested[world] = end[world]
+        return jobs
+
+    def _collect(self) -> None:
+        """Waits for the pending jobs and uploads their states."""
+        if self._pending is None:
+            return
+        pending, self._pending = self._pending, None
+        begin = time.perf_counter()
+        done = pending.done()
+        results: list[JobResult] = pending.result(PRODUCER_TIMEOUT)
+        if not done:
+            self._stats = self._stats._replace(
+                waits=self._stats.waits + 1,
+                wait_seconds=self._stats.wait_seconds + time.perf_counter() - begin,
+            )
+        if results:
+            self._upload(results)
+
+    def _upload(self, results: list[JobResult]) -> None:
+        k = self.slots_per_world
+        self._allocate_values(results[0].states[0])
+        self._write_shared(results[0].states[0].shared)
+        states = self._slot_states[1]
+        for result in results:
+            self.random_states[result.world] = result.random_state
+            for episode, state in zip(result.episodes, result.states):
+                row = result.world * k + episode % k
+                states[row] = state.state
+                for name, value in state.model_rows.items():
+                    self._slot_rows[name][1][row] = value.ravel()
+                for name, value in state.values.items():
+                    self._slot_values[name][1][row] = value.ravel()
+                if state.shared.keys() != self._shared_written.keys():
+                    raise RuntimeError(
+                        "initialize_episode changed different shared model fields in different "
+                        f"workers: {sorted(state.shared)} and {sorted(self._shared_written)}"
+                    )
+            self._uploaded[result.world] = max(
+                self._uploaded[result.world], result.episodes[-1] + 1
+            )
+        self._uploaded_on_device.assign(self._uploaded.astype(np.int32))
+        if self._physics.is_cuda:
+            for array, host in (
+                self._slot_states,
+                *self._slot_rows.values(),
+                *self._slot_values.values(),
+            ):
+                array.assign(host)
+
+    def _allocate_values(self, state) -> None:
+        """Makes the device arrays of the episode values, from the first state's shapes."""
+        if self._slot_values or not state.values:
+            return
+        arrays = self._physics.arrays
+        n, k = self._physics.num_envs, self.slots_per_world
+        for name, value in state.values.items():
+            self._slot_values[name] = self._host_backed((n * k, value.size))
+            target, view = arrays.empty((n, value.size), np.float32)
+            self._value_targets[name] = target
+            self.values[name] = view.reshape((n, *value.shape))
+
+    def _write_shared(self, shared: dict[str, np.ndarray]) -> None:
+        if self._shared_written is not None:
+            return
+        self._shared_written = shared
+        for name, value in shared.items():
+            try:
+                array = getattr(self._physics.warp_model, name)
+            except AttributeError:
+                continue  # a field MuJoCo Warp does not simulate
+            host = array.numpy()
+            array.assign(np.asarray(value).astype(host.dtype).reshape(host.shape))
+
+    def close(self) -> None:
+        """Stops the producers."""
+        self._pending = None
+        self._producer.close()
+
+
+def _scalar(dtype):
+    return getattr(dtype, "_wp_scalar_type_", dtype)
