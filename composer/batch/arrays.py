@@ -4,11 +4,13 @@ Everything a batch computes lives on its Warp device. Task code (rewards, discou
 terminations, observables, controls) reads MuJoCo Warp's arrays through views that share
 their memory, in one array namespace of the Python array API standard (`array_api_compat`):
 
-| device          | array_type       | namespace of task code                           |
-|-----------------|------------------|--------------------------------------------------|
-| Warp's CPU      | anything but torch | NumPy: views of the Warp arrays (`__array_interface__`) |
-| Warp's CPU      | "torch"          | torch CPU tensors (`warp.to_torch`)              |
-| CUDA            | any              | torch CUDA tensors (`warp.to_torch`)             |
+| device     | array_type          | namespace of task code                              |
+|------------|---------------------|-----------------------------------------------------|
+| Warp's CPU | anything but torch  | NumPy: views of the Warp arrays (`Array.numpy()`)   |
+| Warp's CPU | "torch"             | torch CPU tensors (`warp.to_torch`)                 |
+| CUDA       | any                 | torch CUDA tensors (`warp.to_torch`)                |
+
+`namespace="torch"` picks torch on the CPU device too (the code path CUDA runs).
 
 What `reset` and `step` hand out is converted from that namespace without a copy, except
 for `array_type="numpy"` on CUDA, which copies to the host:
@@ -64,6 +66,8 @@ class ArrayBridge:
       warp: the `warp` module.
       device: the Warp device of the batch.
       array_type: one of `ARRAY_TYPES`: what `hand_out` converts to.
+      namespace: "numpy" or "torch" for task code, or None for the table above (NumPy
+        cannot be chosen on CUDA).
 
     Attributes:
       xp: the array-API namespace of task code (`array_api_compat.numpy` or `.torch`).
@@ -75,13 +79,20 @@ class ArrayBridge:
         array_type "jax") is missing; the message names it.
     """
 
-    def __init__(self, warp, device, array_type: str):
+    def __init__(self, warp, device, array_type: str, namespace: str | None = None):
         import array_api_compat
 
         self._wp = warp
         self.device = device
         self.array_type = check_array_type(array_type)
-        self.library = "torch" if device.is_cuda or array_type == "torch" else "numpy"
+        if namespace not in (None, "numpy", "torch") or (namespace == "numpy" and device.is_cuda):
+            raise ValueError(
+                f"namespace: expected None, 'torch' or (on Warp's CPU device) 'numpy', got "
+                f"{namespace!r} on {device}"
+            )
+        if namespace is None:
+            namespace = "torch" if device.is_cuda or array_type == "torch" else "numpy"
+        self.library = namespace
         if self.library == "torch":
             purpose = "batched task code on CUDA" if device.is_cuda else "array_type='torch'"
             self._torch = _import("torch", purpose)

@@ -160,6 +160,8 @@ class BatchEnvironment:
       slots_per_world, refill_interval: see `composer.batch.state_slots`.
       check_action_values: check device actions for NaN and infinity (one integer read
         per step); default: on Warp's CPU device only, where the read costs no copy.
+      namespace: the array namespace of task code, "numpy" or "torch" (default: see
+        `composer.batch.arrays`).
 
     Raises:
       ValueError: for a bad argument, named in the message.
@@ -192,6 +194,7 @@ class BatchEnvironment:
         slots_per_world: int = 2,
         refill_interval: int = 8,
         check_action_values: bool | None = None,
+        namespace: str | None = None,
     ):
         self.num_envs = argument_checks.integer(num_envs=num_envs)
         arrays.check_array_type(array_type)
@@ -227,7 +230,7 @@ class BatchEnvironment:
             hooks.after_compile(host, np.random.RandomState(0))
         wp = _warp.load()[0]
         device = _warp.default_device() if device is None else device
-        self._arrays = arrays.ArrayBridge(wp, wp.get_device(device), array_type)
+        self._arrays = arrays.ArrayBridge(wp, wp.get_device(device), array_type, namespace)
         fields = tuple(self._batch_task.batched_model_fields) + tuple(batched_model_fields)
         self._physics = BatchPhysics(
             host,
@@ -343,6 +346,7 @@ class BatchEnvironment:
             return  # free to know on Warp's CPU device; on CUDA the masked work just runs
         self._mask_view[...] = mask
         if self._slots is None:
+            physics.reset(self._mask)
             self._batch_task.initialize_episode(physics, self._mask_view)
         else:
             self._slots.apply(self._mask)

@@ -132,8 +132,10 @@ class StateSlots:
 
     @property
     def stats(self) -> InitialStateStats:
-        """The producers' `InitialStateStats` since the last `restart`."""
-        return self._stats
+        """The producers' `InitialStateStats` since the last `restart` (reads the device's
+        counters: one device-to-host copy)."""
+        started, reused = self._counters.numpy().astype(np.int64).sum(axis=1)
+        return self._stats._replace(started=int(started), reused=int(reused))
 
     def restart(self, random_states: list) -> None:
         """Drops every prepared state and starts the worlds' streams anew from
@@ -212,7 +214,6 @@ class StateSlots:
             if wait:
                 self._collect()
         total = int(reused.sum())
-        self._stats = self._stats._replace(started=int(started.sum()), reused=total)
         if total and not self._warned:
             self._warned = True
             warnings.warn(
