@@ -503,6 +503,12 @@ class BatchPhysics:
         finally:
             option.disableflags = flags
 
+    def reset(self, mask) -> None:
+        """Resets the worlds of `mask` to the model's initial state (`mj_resetData`: qpos0,
+        zero velocities, time 0), on the device; derived quantities wait for `forward`."""
+        with self._wp.ScopedDevice(self.device):
+            self._mjw.reset_data(self.warp_model, self.warp_data, reset=self.warp_mask(mask))
+
     def warp_mask(self, mask):
         """A bool (num_envs,) mask (of the namespace, NumPy, or Warp) as a Warp array."""
         wp = self._wp

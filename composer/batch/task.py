@@ -77,7 +77,8 @@ class BatchTask:
 
         Override only to draw initial states with array code; the default (this method not
         overridden) starts each world from a state its CPU task's initializers prepared.
-        The environment runs forward on those worlds afterwards.
+        The environment first resets those worlds to the model's initial state
+        (`mj_resetData`: qpos0, zero velocities, time 0), and runs forward on them after.
         """
         raise NotImplementedError(
             f"{type(self).__name__}.initialize_episode: the default initial states are "
