@@ -1,27 +1,38 @@
-"""Batched environments on MuJoCo Warp against raw batched stepping and the CPU, in one run.
+"""Batched environments on MuJoCo Warp: throughput against raw batched stepping, the
+framework's time on the caller's thread, device-to-host copies and initial-state producers.
 
-Task: manipulation `lift_brick_features` (or `--task`), 20 physics steps per control step.
-Throughputs are environment steps (control steps of one world) per second.
+Tasks: manipulation `reach_site_features` and `lift_brick_features` (`--tasks`), 20 physics
+steps per control step, zero actions. Throughputs are environment steps (control steps of
+one world) per second.
 
-Rows, for each num_envs:
-  batch: `composer.batch.BatchEnvironment.step` with zero actions (observations, rewards,
-    time limits and autoreset included).
-  raw warp: the same model on the same device, `mujoco_warp.step` n_sub_steps times per
-    control step, nothing else: the ceiling. overhead = raw / batch (goal on a GPU: <= 1.3
-    at 4096 worlds).
-Baselines, on this machine's cores:
-  threaded CPU: `gymnasium.make_vec(..., backend='threads')` with one sub-environment per core.
-  mj_step ceiling: one thread per core, each calling raw `mujoco.mj_step(m, d, n_sub_steps)` on
-    its own MjData, running free. batch / ceiling is the speed-up over the CPU (goal on a GPU:
-    >= 2 at the best num_envs).
+Table 1, for each task and num_envs:
+  batch/s: `BatchEnvironment.step`, resets included (worlds reset at the rate the time limit
+    `--time-limit` gives them: every 25 control steps by default, 10x the tasks' own 10 s).
+  raw/s: the same model on the same device, `mujoco_warp.step` n_sub_steps times per control
+    step, nothing else: the ceiling. overhead = raw / batch (goal on a GPU: <= 1.3 at 4096).
+  frame ms: the time `step` spends on the caller's thread outside MuJoCo Warp's physics
+    calls (`step`, `step1`, `step2`, `forward`, `set_state`, `get_state`, `reset_data`):
+    the framework's own cost per control step, resets included.
+  d2h/step: calls per step that copy a device array to the host (Warp `.numpy()`/`.list()`,
+    torch `.cpu()`/`.item()`/...), counted over the run (on Warp's CPU device they cost no
+    copy, but would on CUDA).
+Fit: framework ms = fixed + per-world-step µs * num_envs, least squares over the sizes
+  (goal: <= 2 ms fixed, <= 0.25 µs per world-step).
+Table 2: initial states per second of the producers (the CPU task's initializers), threads
+  and processes, 1 and 2 workers.
+Baselines (`--baselines`), on this machine's cores: the threaded CPU vector env (one
+  sub-environment per core) and the mj_step ceiling (one thread per core, raw
+  `mujoco.mj_step` on its own MjData); batch / ceiling is the speed-up over the CPU (goal on a
+  GPU: >= 2 at the best num_envs).
 
-Usage: python benchmarks/batch_env.py [--device cpu|cuda:0] [--num-envs 1,64,1024,4096]
-  [--seconds 3] [--task lift_brick_features] [--array-type numpy|warp|torch|jax]. On Warp's
-  CPU device the default num_envs are 1, 16 and 64 (larger batches take minutes per
-  measurement there).
+Usage: python benchmarks/batch_env.py [--device cpu|cuda:0] [--num-envs 64,256]
+  [--steps 50] [--tasks reach_site_features,lift_brick_features] [--namespace numpy|torch]
+  [--baselines] [--producer-states 64]. On Warp's CPU device the default num_envs are 64 and
+  256 (a control step of 256 lift worlds takes about half a second there).
 """
 
 import argparse
+import functools
 import os
 import pathlib
 import sys
@@ -42,36 +53,106 @@ import mujoco_warp as mjw  # noqa: E402
 import warp as wp  # noqa: E402
 
 import manipulation  # noqa: E402
+from composer import batch as composer_batch  # noqa: E402
+from composer.batch import initial_states  # noqa: E402
 from manipulation import batch  # noqa: E402
+from manipulation.tasks import registry  # noqa: E402
+
+_PHYSICS_CALLS = ("step", "step1", "step2", "forward", "set_state", "get_state", "reset_data")
 
 
-def _rate(step, count: int, seconds: float) -> float:
-    """Environment steps per second of `step()` (each `count` env steps), run for `seconds`."""
-    step()  # compiles, captures graphs, warms caches
-    start = time.perf_counter()
-    calls = 0
-    while True:
-        step()
-        calls += 1
-        elapsed = time.perf_counter() - start
-        if elapsed >= seconds:
-            return calls * count / elapsed
+class _PhysicsClock:
+    """Accumulates the wall time spent inside MuJoCo Warp's physics calls (patched)."""
+
+    def __init__(self):
+        self.seconds = 0.0
+        self._originals = {name: getattr(mjw, name) for name in _PHYSICS_CALLS}
+        for name, original in self._originals.items():
+            setattr(mjw, name, self._timed(original))
+
+    def _timed(self, original):
+        @functools.wraps(original)
+        def timed(*args, **kwargs):
+            begin = time.perf_counter()
+            try:
+                return original(*args, **kwargs)
+            finally:
+                self.seconds += time.perf_counter() - begin
+
+        return timed
+
+    def restore(self) -> None:
+        for name, original in self._originals.items():
+            setattr(mjw, name, original)
 
 
-def _batch_rows(
-    task: str, num_envs: int, device: str, seconds: float, array_type: str
-) -> tuple[float, float]:
-    env = batch.load(task, num_envs, device=device, seed=0, array_type=array_type)
+class _HostCopies:
+    """Counts calls that copy a device array to the host (patched while counting)."""
+
+    def __init__(self):
+        self.count = 0
+        self._originals = {(wp.array, "numpy"): wp.array.numpy, (wp.array, "list"): wp.array.list}
+        try:
+            import torch
+        except ImportError:
+            torch = None
+        if torch is not None:
+            for name in ("cpu", "numpy", "item", "tolist", "__bool__"):
+                self._originals[(torch.Tensor, name)] = getattr(torch.Tensor, name)
+        for (owner, name), original in self._originals.items():
+            setattr(owner, name, self._counted(original))
+
+    def _counted(self, original):
+        def counted(*args, **kwargs):
+            self.count += 1
+            return original(*args, **kwargs)
+
+        return counted
+
+    def restore(self) -> None:
+        for (owner, name), original in self._originals.items():
+            setattr(owner, name, original)
+
+
+def _batch_row(task: str, num_envs: int, args) -> dict:
+    env = batch.load(
+        task,
+        num_envs,
+        device=args.device,
+        seed=0,
+        time_limit=args.time_limit,
+        namespace=args.namespace,
+        check_action_values=False,
+    )
     env.reset()
-    action = np.zeros((num_envs, *env.action_spec().shape))
+    action = env.hand_out(np.zeros((num_envs, *env.action_spec().shape), np.float32))
     physics = env.physics
-
-    def step():
+    for _ in range(3):  # compiles, captures graphs, warms caches
         env.step(action)
-        wp.synchronize_device(physics.device)  # device outputs return before they are ready
+    wp.synchronize_device(physics.device)
+    clock, copies = _PhysicsClock(), _HostCopies()
+    try:
+        begin = time.perf_counter()
+        for _ in range(args.steps):
+            env.step(action)
+        wp.synchronize_device(physics.device)
+        elapsed = time.perf_counter() - begin
+    finally:
+        clock.restore(), copies.restore()
+    stats = env.initial_state_stats()
+    env.close()
+    raw = _raw_rate(physics, env.task.task.physics_steps_per_control_step, args.steps)
+    return {
+        "batch": args.steps * num_envs / elapsed,
+        "raw": raw,
+        "framework_ms": 1e3 * (elapsed - clock.seconds) / args.steps,
+        "d2h": copies.count / args.steps,
+        "reused": stats.reused,
+        "started": stats.started,
+    }
 
-    batch_rate = _rate(step, num_envs, seconds)
-    n_sub_steps = env.task.task.physics_steps_per_control_step
+
+def _raw_rate(physics, n_sub_steps: int, steps: int) -> float:
     model, data = physics.warp_model, physics.warp_data
     if physics.is_cuda:
         with wp.ScopedDevice(physics.device):
@@ -82,7 +163,6 @@ def _batch_rows(
 
         def raw():
             wp.capture_launch(capture.graph)
-            wp.synchronize_device(physics.device)
 
     else:
 
@@ -90,7 +170,42 @@ def _batch_rows(
             for _ in range(n_sub_steps):
                 mjw.step(model, data)
 
-    return batch_rate, _rate(raw, num_envs, seconds)
+    raw()
+    wp.synchronize_device(physics.device)
+    begin = time.perf_counter()
+    for _ in range(steps):
+        raw()
+    wp.synchronize_device(physics.device)
+    return steps * physics.num_envs / (time.perf_counter() - begin)
+
+
+def _producer_rate(task: str, workers: int, processes: bool, states: int) -> float:
+    factory = functools.partial(registry.build_task, task)
+    batch_task_type = type(composer_batch.for_task(registry.build_task(task)))
+    fields = batch_task_type.batched_model_fields
+    maker = initial_states.build_maker(factory, batch_task_type, fields)
+    producer = initial_states.StateProducer(
+        maker,
+        workers=workers,
+        processes=processes,
+        task_factory=factory,
+        batch_task_type=batch_task_type,
+        model_fields=fields,
+    )
+    try:
+
+        def jobs(offset):
+            return [
+                initial_states.Job(world, (0,), np.random.RandomState(offset + world))
+                for world in range(states)
+            ]
+
+        producer.submit(jobs(0)).result()  # starts the workers, builds their tasks
+        begin = time.perf_counter()
+        producer.submit(jobs(states)).result()
+        return states / (time.perf_counter() - begin)
+    finally:
+        producer.close()
 
 
 def _threaded_cpu(task: str, seconds: float) -> float:
@@ -101,7 +216,12 @@ def _threaded_cpu(task: str, seconds: float) -> float:
     env.reset(seed=0)
     action = np.zeros(env.action_space.shape)
     try:
-        return _rate(lambda: env.step(action), cores, seconds)
+        env.step(action)
+        begin, calls = time.perf_counter(), 0
+        while time.perf_counter() - begin < seconds:
+            env.step(action)
+            calls += 1
+        return calls * cores / (time.perf_counter() - begin)
     finally:
         env.close()
 
@@ -123,47 +243,73 @@ def _mj_step_ceiling(task: str, seconds: float) -> float:
             counts[index] += 1
 
     threads = [threading.Thread(target=run, args=(i,)) for i in range(cores)]
-    start = time.perf_counter()
+    begin = time.perf_counter()
     for thread in threads:
         thread.start()
     time.sleep(seconds)
     stop.set()
     for thread in threads:
         thread.join()
-    return sum(counts) / (time.perf_counter() - start)
+    return sum(counts) / (time.perf_counter() - begin)
+
+
+def _fit(sizes, framework_ms) -> tuple[float, float]:
+    """(fixed ms, µs per world-step) of framework_ms = fixed + per_world * num_envs."""
+    slope, intercept = np.polyfit(np.asarray(sizes, float), np.asarray(framework_ms), 1)
+    return intercept, slope * 1e3
 
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--device", default="cpu", help="Warp device: cpu or cuda:0")
     parser.add_argument("--num-envs", default=None, help="comma-separated numbers of worlds")
-    parser.add_argument("--seconds", type=float, default=3.0, help="time per measurement")
-    parser.add_argument("--task", default="lift_brick_features", choices=batch.BATCHED)
-    parser.add_argument(
-        "--array-type", default="numpy", help="what the batch hands out: numpy, warp, torch, jax"
-    )
+    parser.add_argument("--steps", type=int, default=50, help="control steps per measurement")
+    parser.add_argument("--tasks", default="reach_site_features,lift_brick_features")
+    parser.add_argument("--time-limit", type=float, default=1.0, help="seconds per episode")
+    parser.add_argument("--namespace", default=None, help="task code on numpy or torch")
+    parser.add_argument("--baselines", action="store_true", help="threaded CPU and mj_step")
+    parser.add_argument("--producer-states", type=int, default=64, help="states per timing")
     args = parser.parse_args()
-    default_sizes = "1,16,64" if args.device == "cpu" else "1,64,1024,4096,8192"
+    default_sizes = "64,256" if args.device == "cpu" else "1024,4096,8192"
     sizes = [int(n) for n in (args.num_envs or default_sizes).split(",")]
-
-    threaded = _threaded_cpu(args.task, args.seconds)
-    ceiling = _mj_step_ceiling(args.task, args.seconds)
+    tasks = args.tasks.split(",")
     print(
-        f"task {args.task}, device {args.device}, array_type {args.array_type}, "
-        f"{os.cpu_count()} cores, "
-        f"load average {os.getloadavg()[0]:.2f}"
+        f"device {args.device}, namespace {args.namespace or 'default'}, {args.steps} steps per "
+        f"row, time limit {args.time_limit} s, {os.cpu_count()} cores, load average "
+        f"{os.getloadavg()[0]:.2f}"
     )
-    print(f"{'num_envs':>8} {'batch/s':>10} {'raw warp/s':>11} {'overhead':>9} {'vs ceiling':>11}")
-    for num_envs in sizes:
-        batch_rate, raw_rate = _batch_rows(
-            args.task, num_envs, args.device, args.seconds, args.array_type
-        )
-        print(
-            f"{num_envs:>8} {batch_rate:>10.0f} {raw_rate:>11.0f} {raw_rate / batch_rate:>9.2f} "
-            f"{batch_rate / ceiling:>11.2f}"
-        )
-    print(f"threaded CPU vector env ({os.cpu_count()} sub-envs): {threaded:.0f} env-steps/s")
-    print(f"mj_step ceiling ({os.cpu_count()} threads, free): {ceiling:.0f} env-steps/s")
+    print(
+        f"{'task':<22} {'num_envs':>8} {'batch/s':>9} {'raw/s':>9} {'overhead':>8} "
+        f"{'frame ms':>8} {'d2h/step':>8} {'reused':>11}"
+    )
+    for task in tasks:
+        framework = []
+        for num_envs in sizes:
+            row = _batch_row(task, num_envs, args)
+            framework.append(row["framework_ms"])
+            print(
+                f"{task:<22} {num_envs:>8} {row['batch']:>9.0f} {row['raw']:>9.0f} "
+                f"{row['raw'] / row['batch']:>8.2f} {row['framework_ms']:>8.2f} "
+                f"{row['d2h']:>8.3f} {row['reused']:>5}/{row['started']:<5}"
+            )
+        if len(sizes) > 1:
+            fixed, per_world = _fit(sizes, framework)
+            print(f"{task:<22} framework fit: {fixed:.2f} ms fixed + {per_world:.3f} µs/world-step")
+    print()
+    print(f"{'task':<22} {'producers':>12} {'workers':>7} {'states/s':>9}")
+    for task in tasks:
+        for processes in (False, True):
+            for workers in (1, 2):
+                rate = _producer_rate(task, workers, processes, args.producer_states)
+                kind = "processes" if processes else "threads"
+                print(f"{task:<22} {kind:>12} {workers:>7} {rate:>9.0f}")
+    if args.baselines:
+        print()
+        for task in tasks:
+            threaded = _threaded_cpu(task, 3.0)
+            ceiling = _mj_step_ceiling(task, 3.0)
+            print(f"{task}: threaded CPU vector env ({os.cpu_count()} sub-envs) {threaded:.0f}/s")
+            print(f"{task}: mj_step ceiling ({os.cpu_count()} threads, free) {ceiling:.0f}/s")
 
 
 if __name__ == "__main__":

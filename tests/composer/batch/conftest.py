@@ -1,5 +1,6 @@
-"""The batch tests: Warp's kernel cache under the repository's .cache/, and tests marked
-`warp` skipped, with the reason printed, when MuJoCo Warp is not installed."""
+"""The batch tests: Warp's kernel cache under the repository's .cache/, tests marked `warp`
+skipped, with the reason printed, when MuJoCo Warp is not installed, and the default
+device's warning (tested on its own) silenced for the tests that build with the default."""
 
 import os
 import pathlib
@@ -12,6 +13,12 @@ _REPOSITORY = pathlib.Path(__file__).resolve().parents[3]
 os.environ.setdefault(_warp.KERNEL_CACHE_ENV, str(_REPOSITORY / ".cache" / "warp"))
 
 _SKIP = pytest.mark.skip(reason="needs MuJoCo Warp: pip install -e '.[warp]'")
+
+
+def pytest_configure(config):
+    config.addinivalue_line(
+        "filterwarnings", r"ignore:composer\.batch\: Warp sees no CUDA device:RuntimeWarning"
+    )
 
 
 def pytest_collection_modifyitems(config, items):

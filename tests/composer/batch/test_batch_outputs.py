@@ -178,3 +178,23 @@ def test_jax_outputs_equal_the_numpy_outputs_and_take_jax_actions(numpy_run, nam
             ),
             reference,
         )
+
+
+def test_torch_task_code_gives_the_numpy_results_as_torch_tensors(numpy_run, name):
+    torch = pytest.importorskip("torch", reason="torch is optional: pip install torch==2.13.0")
+    actions, expected = numpy_run
+    env = manipulation_batch.load(name, NUM_ENVS, seed=3, device="cpu", array_type="torch")
+    assert env.physics.xp.__name__.endswith("torch")  # the hooks ran on torch tensors
+    steps = [env.reset()] + [env.step(torch.as_tensor(action)) for action in actions]
+    # The same float32 physics; torch's and NumPy's float32 sin, cos, exp and norms may
+    # round differently, by an ulp or two of each operation (4 ulps allowed).
+    tolerance = 4 * np.finfo(np.float32).eps
+    for time_step, reference in zip(steps, expected):
+        assert all(isinstance(v, torch.Tensor) for v in time_step.observation.values())
+        np.testing.assert_array_equal(time_step.step_type.numpy(), reference.step_type)
+        np.testing.assert_allclose(
+            time_step.reward.numpy(), reference.reward, rtol=tolerance, atol=tolerance
+        )
+        for key, value in reference.observation.items():
+            got = time_step.observation[key].numpy()
+            np.testing.assert_allclose(got, value, rtol=tolerance, atol=tolerance, err_msg=key)

@@ -1,0 +1,32 @@
+#!/usr/bin/env bash
+# The GPU check, in one call on a machine with an NVIDIA GPU, in under 8 minutes: the warp
+# tests on cuda:0, the batch benchmark at 1,024 to 8,192 worlds beside raw MuJoCo Warp and
+# the CPU ceiling (raw mj_step on all cores), then the threaded vector env's table on all
+# cores (N up to 32). Prints the tables; each part has its own time limit.
+#
+# Usage: bash benchmarks/gpu_check.sh
+# Set-up: uses .venv when it exists (carry it to the machine), else makes one and installs
+# the project with the extras [warp,test] and torch (CUDA task code runs on torch), from
+# whatever package index the machine reaches.
+set -uo pipefail
+cd "$(dirname "$0")/.."
+
+if [ ! -x .venv/bin/python ]; then
+  python3 -m venv .venv
+  .venv/bin/python -m pip install -q -e ".[warp,test]" torch
+fi
+. .venv/bin/activate
+export COMPOSER_WARP_KERNEL_CACHE=.cache/warp MUJOCO_GL=egl
+nvidia-smi --query-gpu=name,memory.total,driver_version --format=csv,noheader || true
+echo "cores: $(nproc), load: $(cut -d' ' -f1 /proc/loadavg)"
+
+echo "== warp tests on cuda:0"
+COMPOSER_TEST_WARP_DEVICE=cuda:0 timeout 240 python -m pytest -q -p no:cacheprovider -m warp \
+  tests/composer/batch -x -W ignore::RuntimeWarning | tail -15
+
+echo "== batch benchmark on cuda:0"
+timeout 200 python benchmarks/batch_env.py --device cuda:0 --num-envs 1024,4096,8192 \
+  --steps 50 --baselines --producer-states 256
+
+echo "== threaded vector env on $(nproc) cores"
+timeout 120 python benchmarks/vector_env.py --sizes 1,2,4,8,16,32 --repeats 3 --steps 50 --no-ray
