@@ -10,7 +10,9 @@ their memory, in one array namespace of the Python array API standard (`array_ap
 | Warp's CPU | "torch"             | torch CPU tensors (`warp.to_torch`)                 |
 | CUDA       | any                 | torch CUDA tensors (`warp.to_torch`)                |
 
-`namespace="torch"` picks torch on the CPU device too (the code path CUDA runs).
+`namespace="torch"` picks torch on the CPU device too (the code path CUDA runs). On CUDA,
+the calling thread's current torch stream becomes Warp's stream of the device, so that
+torch's and Warp's work on the same memory runs in order.
 
 What `reset` and `step` hand out is converted from that namespace without a copy, except
 for `array_type="numpy"` on CUDA, which copies to the host:
@@ -98,6 +100,11 @@ class ArrayBridge:
             self._torch = _import("torch", purpose)
             self.xp = array_api_compat.array_namespace(self._torch.zeros(0))
             self.xp_device = self._torch.device(str(device))
+            if device.is_cuda:
+                # torch's work on the batch's arrays and Warp's must be ordered: torch runs on
+                # Warp's stream of the device (Warp cannot record CUDA graphs on torch's
+                # legacy default stream).
+                self._torch.cuda.set_stream(warp.stream_to_torch(warp.get_stream(device)))
         else:
             self.xp = array_api_compat.array_namespace(np.zeros(0))
             self.xp_device = "cpu"

@@ -343,14 +343,18 @@ class BatchEnvironment:
         """Starts a new episode in the worlds of `mask` (an array of the namespace)."""
         physics = self._physics
         if physics.arrays.library == "numpy" and not mask.any():
-            return  # free to know on Warp's CPU device; on CUDA the masked work just runs
+            return  # free to know in NumPy; elsewhere the masked work runs for no world
         self._mask_view[...] = mask
         if self._slots is None:
             physics.reset(self._mask)
             self._batch_task.initialize_episode(physics, self._mask_view)
+            physics.forward(self._mask, actuation=False)
         else:
-            self._slots.apply(self._mask)
-        physics.forward(self._mask, actuation=False)
+            physics.run_captured("start_episodes", self._apply_prepared_states)
+
+    def _apply_prepared_states(self) -> None:
+        self._slots.apply(self._mask)
+        self._physics.forward(self._mask, actuation=False)
 
     def reset(self) -> BatchTimeStep:
         """Starts a new episode in every world.

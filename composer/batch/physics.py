@@ -17,7 +17,7 @@ touching the others.
 """
 
 import dataclasses
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from typing import Any
 
 import mujoco
@@ -377,7 +377,7 @@ class BatchPhysics:
         )
         self._acc_sensors = self._acc_sensor_mask()
         self._saved_sensordata = None
-        self._graphs: dict[int, Any] = {}
+        self._graphs: dict[Any, Any] = {}
         self.data = _Struct(self, field_layout.DATA)
         self.model = _Struct(self, field_layout.MODEL)
         self.named = _Named(self)
@@ -458,17 +458,28 @@ class BatchPhysics:
         wp = self._wp
         if self._acc_sensors is not None and self._saved_sensordata is None:
             self._saved_sensordata = wp.zeros_like(self.warp_data.sensordata)
+        self.run_captured(("step", n_sub_steps), lambda: self._control_step(n_sub_steps))
+
+    def run_captured(self, key, work: Callable[[], None]) -> None:
+        """Runs `work` (device work only, on persistent arrays): on CUDA as a graph
+        captured at the first call under `key`, elsewhere directly.
+
+        The first call runs `work` once (compiling its kernels) and then records it
+        without running it; later calls launch the recording.
+        """
         if not self.is_cuda:
-            self._control_step(n_sub_steps)
+            work()
             return
-        graph = self._graphs.get(n_sub_steps)
-        if graph is None:
-            with wp.ScopedDevice(self.device):
-                self._control_step(n_sub_steps)  # compiles the kernels outside the capture
-                with wp.ScopedCapture() as capture:
-                    self._control_step(n_sub_steps)
-            graph = self._graphs[n_sub_steps] = capture.graph
-        wp.capture_launch(graph)
+        wp = self._wp
+        graph = self._graphs.get(key)
+        if graph is not None:
+            wp.capture_launch(graph)
+            return
+        with wp.ScopedDevice(self.device):
+            work()
+            with wp.ScopedCapture() as capture:
+                work()
+        self._graphs[key] = capture.graph
 
     def forward(self, mask=None, *, actuation: bool = True) -> None:
         """Recomputes derived quantities of the worlds of `mask`, as `mj_forward`.
