@@ -4,9 +4,10 @@ Needs the extra `[warp]` (`mujoco-warp`, `warp-lang`); importing this package do
 import Warp, building a `BatchEnvironment` does. See docs/batch.md for the limits.
 """
 
+from composer.batch.bindings import BatchBinding
 from composer.batch.environment import BatchEnvironment, BatchTimeStep
 from composer.batch.observables import BatchObservables, batch_reader
-from composer.batch.physics import BatchBinding, BatchPhysics
+from composer.batch.physics import BatchPhysics
 from composer.batch.task import BatchTask, for_task, register
 
 __all__ = [

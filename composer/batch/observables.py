@@ -69,7 +69,7 @@ class FieldSelection:
 
 def _selection(physics, binding, kind: str, indices) -> FieldSelection:
     """The entries of `binding.<kind>` that the per-world `indices` select, in turn."""
-    field, index = binding._field_and_index(kind)
+    field, index = binding.selection(kind)
     if not isinstance(index, (int, slice, np.integer)):
         index = physics.arrays.to_host(index)
     columns = np.arange(int(np.prod(field.c_shape))).reshape(field.c_shape)[index]
