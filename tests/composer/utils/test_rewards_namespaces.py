@@ -13,16 +13,7 @@ import pytest
 
 from composer.utils import rewards
 
-ALL_SIGMOIDS = (
-    "gaussian",
-    "hyperbolic",
-    "long_tail",
-    "reciprocal",
-    "cosine",
-    "linear",
-    "quadratic",
-    "tanh_squared",
-)
+ALL_SIGMOIDS = rewards.SIGMOIDS
 
 # (bounds, margin, value_at_margin): a point target, an interval, both one-sided intervals,
 # and the indicator of an interval (margin 0).
