@@ -1,6 +1,9 @@
 """The device-first batch: masked resets leave the other worlds alone, SAME_STEP autoreset,
 no device-to-host copy at a step, initial states from producers (threads or processes, the
-same states), reuse of states counted, and the default device."""
+same states), reuse of states counted, and the default device.
+
+The batches are built on the default device: Warp's CPU device here, cuda:0 where Warp sees
+a GPU (benchmarks/gpu_check.sh runs these tests there)."""
 
 import warnings
 
@@ -40,10 +43,8 @@ class _EndsAt(manipulation_batch.BatchReach):
 
 def test_a_world_that_resets_leaves_the_other_worlds_bit_for_bit_as_they_were():
     never = 10**6
-    resetting = BatchEnvironment(
-        _EndsAt([2, never, never, never]), NUM_ENVS, random_state=9, device="cpu"
-    )
-    steady = BatchEnvironment(_EndsAt([never] * 4), NUM_ENVS, random_state=9, device="cpu")
+    resetting = BatchEnvironment(_EndsAt([2, never, never, never]), NUM_ENVS, random_state=9)
+    steady = BatchEnvironment(_EndsAt([never] * 4), NUM_ENVS, random_state=9)
     resetting.reset(), steady.reset()
     restarted = False
     for action in _actions(steady, 6):
@@ -56,7 +57,7 @@ def test_a_world_that_resets_leaves_the_other_worlds_bit_for_bit_as_they_were():
 
 
 def test_same_step_returns_last_with_the_next_episodes_first_observation():
-    kwargs = dict(seed=4, time_limit=3 * CONTROL_TIMESTEP, device="cpu")
+    kwargs = dict(seed=4, time_limit=3 * CONTROL_TIMESTEP)
     next_step = manipulation_batch.load(NAME, 2, **kwargs)
     same_step = manipulation_batch.load(NAME, 2, autoreset_mode="same_step", **kwargs)
     next_step.reset(), same_step.reset()
@@ -110,7 +111,6 @@ def test_a_step_copies_nothing_to_the_host_but_the_refill_read(array_type, monke
         NAME,
         NUM_ENVS,
         seed=0,
-        device="cpu",
         array_type=array_type,
         refill_interval=refill_interval,
         # Task code on torch, and device actions unchecked: what runs on CUDA, where
@@ -132,7 +132,7 @@ def test_a_step_copies_nothing_to_the_host_but_the_refill_read(array_type, monke
 
 
 def test_processes_and_threads_make_the_same_initial_states():
-    kwargs = dict(seed=21, time_limit=2 * CONTROL_TIMESTEP, device="cpu", refill_interval=1)
+    kwargs = dict(seed=21, time_limit=2 * CONTROL_TIMESTEP, refill_interval=1)
     threads = manipulation_batch.load(NAME, 3, **kwargs)
     processes = manipulation_batch.load(NAME, 3, state_workers=2, state_processes=True, **kwargs)
     try:
@@ -153,7 +153,7 @@ def test_reused_initial_states_are_counted_and_warned_about():
     # One slot per world, refilled every 8 steps, episodes of 2 steps: the episodes that
     # start at steps 3 and 6 find only the state their world used before.
     env = manipulation_batch.load(
-        NAME, 2, seed=1, device="cpu", time_limit=2 * CONTROL_TIMESTEP, slots_per_world=1
+        NAME, 2, seed=1, time_limit=2 * CONTROL_TIMESTEP, slots_per_world=1
     )
     env.reset()
     with warnings.catch_warnings(record=True) as caught:
