@@ -181,8 +181,8 @@ def _raw_rate(physics, n_sub_steps: int, steps: int) -> float:
 
 def _producer_rate(task: str, workers: int, processes: bool, states: int) -> float:
     factory = functools.partial(registry.build_task, task)
-    batch_task_type = type(composer_batch.for_task(registry.build_task(task)))
-    fields = batch_task_type.batched_model_fields
+    batch_task = composer_batch.for_task(registry.build_task(task))
+    batch_task_type, fields = type(batch_task), batch_task.batched_model_fields
     maker = initial_states.build_maker(factory, batch_task_type, fields)
     producer = initial_states.StateProducer(
         maker,
