@@ -73,6 +73,16 @@ class Place(base.ManipulationTask):
         """The entity on the pedestal the brick goes on (or in)."""
         return self._target
 
+    @property
+    def seat_height(self) -> float:
+        """The height (m) of the brick's seat above the target's origin."""
+        return self._seat_height
+
+    @property
+    def seat_tolerance(self) -> float:
+        """How far (m) from its seat the brick still earns the full reward."""
+        return self._tolerance
+
     def after_compile(self, physics, random_state) -> None:
         super().after_compile(physics, random_state)
         self._seat_error = SeatErrors(physics, [(self._target, self._prop)], self._seat_height)

@@ -18,7 +18,8 @@ _SKIP = pytest.mark.skip(reason="needs MuJoCo Warp: pip install -e '.[warp]'")
 def pytest_configure(config):
     config.addinivalue_line(
         # The message's own colon cannot be written in a filter: '.' matches it.
-        "filterwarnings", "ignore:composer.batch. Warp sees no CUDA device:RuntimeWarning"
+        "filterwarnings",
+        "ignore:composer.batch. Warp sees no CUDA device:RuntimeWarning",
     )
 
 

@@ -1,17 +1,18 @@
-"""Both batched tasks through gymnasium.make_vec(..., backend='warp') as a VectorEnv."""
+"""The batched tasks through gymnasium.make_vec(..., backend='warp') as a VectorEnv."""
 
 import gymnasium
 import numpy as np
 import pytest
 
 import manipulation  # noqa: F401  (registers the composer/ ids with Gymnasium)
+from manipulation import batch as manipulation_batch
 
 pytestmark = pytest.mark.warp
 
-NUM_ENVS = 3
+NUM_ENVS = 2
 
 
-@pytest.mark.parametrize("name", ["reach_site_features", "lift_brick_features"])
+@pytest.mark.parametrize("name", manipulation_batch.BATCHED)
 def test_make_vec_with_backend_warp_steps_every_world(name):
     env = gymnasium.make_vec(
         f"composer/{name}-v0",
