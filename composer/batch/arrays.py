@@ -132,6 +132,8 @@ class ArrayBridge:
             torch = self._torch
             if array_library(values) == "warp":
                 values = self._wp.to_torch(values)
+            elif isinstance(values, np.ndarray) and not values.flags.writeable:
+                values = values.copy()  # torch takes only writeable NumPy memory
             tensor = torch.as_tensor(values, device=str(self.device))
             return tensor if dtype is None else tensor.to(_torch_dtype(torch, dtype))
         if array_library(values) == "warp":

@@ -19,7 +19,8 @@ def kernels() -> SimpleNamespace:
 
     Returns:
       A namespace with `restore_columns`, `copy_worlds`, `count_nonfinite`,
-      `contact_worlds`, `take_slots` and `count_episodes` (documented on each).
+      `contact_worlds`, `take_slots`, `count_episodes` and `static_geom_poses`
+      (documented on each).
     """
     global _kernels
     if _kernels is None:
@@ -124,6 +125,54 @@ def _define(wp) -> SimpleNamespace:
                 counters[1, world] = counters[1, world] + 1
             counters[0, world] = counters[0, world] + 1
 
+    @wp.func
+    def mul_quat(a: wp.quat, b: wp.quat):
+        # MuJoCo's order: w, x, y, z.
+        return wp.quat(
+            a[0] * b[0] - a[1] * b[1] - a[2] * b[2] - a[3] * b[3],
+            a[0] * b[1] + a[1] * b[0] + a[2] * b[3] - a[3] * b[2],
+            a[0] * b[2] - a[1] * b[3] + a[2] * b[0] + a[3] * b[1],
+            a[0] * b[3] + a[1] * b[2] - a[2] * b[1] + a[3] * b[0],
+        )
+
+    @wp.func
+    def rotate(v: wp.vec3, q: wp.quat):
+        # v rotated by the unit quaternion q (w, x, y, z).
+        u = wp.vec3(q[1], q[2], q[3])
+        t = 2.0 * wp.cross(u, v)
+        return v + q[0] * t + wp.cross(u, t)
+
+    @wp.func
+    def quat_to_mat(q: wp.quat):
+        w, x, y, z = q[0], q[1], q[2], q[3]
+        return wp.mat33(
+            1.0 - 2.0 * (y * y + z * z), 2.0 * (x * y - w * z), 2.0 * (x * z + w * y),
+            2.0 * (x * y + w * z), 1.0 - 2.0 * (x * x + z * z), 2.0 * (y * z - w * x),
+            2.0 * (x * z - w * y), 2.0 * (y * z + w * x), 1.0 - 2.0 * (x * x + y * y),
+        )  # fmt: skip
+
+    @wp.kernel(module="unique")
+    def static_geom_poses(
+        geoms: wp.array(dtype=wp.int32),
+        geom_bodyid: wp.array(dtype=wp.int32),
+        geom_pos: wp.array2d(dtype=wp.vec3),
+        geom_quat: wp.array2d(dtype=wp.quat),
+        xpos: wp.array2d(dtype=wp.vec3),
+        xquat: wp.array2d(dtype=wp.quat),
+        geom_xpos: wp.array2d(dtype=wp.vec3),
+        geom_xmat: wp.array2d(dtype=wp.mat33),
+    ):
+        """The world poses of `geoms`, geoms of bodies welded to the world, from their
+        bodies' poses (MuJoCo Warp computes them once, when the data is made)."""
+        world, k = wp.tid()
+        geom = geoms[k]
+        body = geom_bodyid[geom]
+        xq = xquat[world, body]
+        position = geom_pos[world % geom_pos.shape[0], geom]
+        geom_xpos[world, geom] = xpos[world, body] + rotate(position, xq)
+        rotation = mul_quat(xq, geom_quat[world % geom_quat.shape[0], geom])
+        geom_xmat[world, geom] = quat_to_mat(rotation)
+
     return SimpleNamespace(
         restore_columns=restore_columns,
         copy_worlds=copy_worlds,
@@ -131,4 +180,5 @@ def _define(wp) -> SimpleNamespace:
         contact_worlds=contact_worlds,
         take_slots=take_slots,
         count_episodes=count_episodes,
+        static_geom_poses=static_geom_poses,
     )

@@ -136,6 +136,7 @@ class BatchPhysics:
             zip(_per_world_arrays(warp, self._scratch), _per_world_arrays(warp, self.warp_data))
         )
         self._acc_sensors = self._acc_sensor_mask()
+        self._static_geoms = self._moving_static_geoms()
         self._saved_sensordata = None
         self._graphs: dict[Any, Any] = {}
         self.data = StructViews(self, field_layout.DATA)
@@ -190,6 +191,43 @@ class BatchPhysics:
         if not mask.any():
             return None
         return self._wp.array(np.nonzero(mask)[0].astype(np.int32), device=self.device)
+
+    def _moving_static_geoms(self):
+        """The geoms of bodies welded to the world whose pose a world's model row may set
+        (a batched body_pos, body_quat, geom_pos or geom_quat), as a Warp int array, or None.
+
+        MuJoCo Warp computes such geoms' world poses once, when the data is made, and never
+        again; `forward` recomputes them for the worlds it runs.
+        """
+        model = self.mj_model
+        if not self.batched_model_fields & {"body_pos", "body_quat", "geom_pos", "geom_quat"}:
+            return None
+        bodies = model.geom_bodyid
+        static = (model.body_weldid[bodies] == 0) & (
+            model.body_mocapid[model.body_rootid[bodies]] == -1
+        )
+        if not static.any():
+            return None
+        return self._wp.array(np.flatnonzero(static).astype(np.int32), device=self.device)
+
+    def _place_static_geoms(self, data) -> None:
+        """Runs kinematics on `data` and recomputes its static geoms' world poses."""
+        wp, model = self._wp, self.warp_model
+        self._mjw.kinematics(model, data)
+        wp.launch(
+            kernels.kernels().static_geom_poses,
+            dim=(self.num_envs, self._static_geoms.shape[0]),
+            inputs=[
+                self._static_geoms,
+                model.geom_bodyid,
+                model.geom_pos,
+                model.geom_quat,
+                data.xpos,
+                data.xquat,
+            ],
+            outputs=[data.geom_xpos, data.geom_xmat],
+            device=self.device,
+        )
 
     def _control_step(self, n_sub_steps: int) -> None:
         """C MuJoCo's legacy step chain (`mjcf.Physics.step`): step2, n-1 steps, step1.
@@ -263,11 +301,15 @@ class BatchPhysics:
         try:
             with wp.ScopedDevice(self.device):
                 if mask is None:
+                    if self._static_geoms is not None:
+                        self._place_static_geoms(self.warp_data)
                     mjw.forward(model, self.warp_data)
                     return
                 active = self.warp_mask(mask)
                 mjw.get_state(model, self.warp_data, self._states, _STATE_SPEC)
                 mjw.set_state(model, self._scratch, self._states, _STATE_SPEC, active)
+                if self._static_geoms is not None:
+                    self._place_static_geoms(self._scratch)
                 mjw.forward(model, self._scratch)
                 for source, target in self._world_arrays:
                     _copy_worlds(active, source, target)

@@ -32,13 +32,9 @@ shows), none because of its batched task:
   tolerance is 1.7e-5). Once the tower has settled the dynamics are the arm's again: a test
   compares from there, after checking that the reference is reproducible at float32 (a CPU
   twin started from the rounded state stays within the tolerance).
-- place, and stack with a fixed base: MuJoCo Warp computes the poses of the geoms of bodies
-  fixed to the world once, when the model is put on the device, so a pedestal or base brick
-  placed per episode keeps colliding where it was compiled (composer.batch does not
-  recompute them yet). With that fixed, place_cradle still fails: a finger strikes a
-  cradle post (seed 101, step 20), and the impact multiplies the batch's float32 error a
-  hundredfold, past the tolerance (a twin from the rounded start, whose error does not
-  grow before the impact, stays within it).
+- place_cradle: a finger strikes a cradle post (seed 101, step 20), and the impact
+  multiplies the batch's float32 error a hundredfold, past the tolerance (a twin from the
+  rounded start, whose error does not grow before the impact, stays within it).
 - lift_large_box: once the box tilts under a finger, MuJoCo Warp's box-box contacts with
   the table take the box's face normal where C MuJoCo takes the table's (for the same
   state), so the friction forces that push the box differ.
@@ -72,14 +68,9 @@ STATE_FACTOR = 32.0
 # The highest seat of the seated tasks (a brick on a brick; the cradle's is lower), in m.
 _SEAT_HEIGHT = Duplo2x4.HEIGHT
 
-_STATIC_GEOMS = pytest.mark.xfail(
+_IMPACT = pytest.mark.xfail(
     strict=True,
-    reason="MuJoCo Warp never updates the geoms of bodies fixed to the world, and "
-    "composer.batch does not recompute them when a reset moves such a body",
-)
-_STATIC_GEOMS_AND_IMPACT = pytest.mark.xfail(
-    strict=True,
-    reason="as place_brick, and a finger striking a cradle post amplifies the float32 error",
+    reason="a finger striking a cradle post amplifies the float32 error beyond the tolerance",
 )
 _SETTLING_TOWER = pytest.mark.xfail(
     strict=True,
@@ -90,10 +81,7 @@ _BOX_NORMAL = pytest.mark.xfail(
     reason="MuJoCo Warp's box-box contact normal differs from C MuJoCo's once the box tilts",
 )
 _KNOWN_DIFFERENCES = {
-    "place_brick_features": _STATIC_GEOMS,
-    "place_cradle_features": _STATIC_GEOMS_AND_IMPACT,
-    "stack_2_bricks_features": _STATIC_GEOMS,
-    "stack_3_bricks_features": _STATIC_GEOMS,
+    "place_cradle_features": _IMPACT,
     "lift_large_box_features": _BOX_NORMAL,
     "reassemble_3_bricks_fixed_order_features": _SETTLING_TOWER,
     "reassemble_5_bricks_random_order_features": _SETTLING_TOWER,
