@@ -12,12 +12,16 @@ Table 1, for each task and num_envs:
     step, nothing else: the ceiling. overhead = raw / batch (goal on a GPU: <= 1.3 at 4096).
   frame ms: the time `step` spends on the caller's thread outside MuJoCo Warp's physics
     calls (`step`, `step1`, `step2`, `forward`, `set_state`, `get_state`, `reset_data`):
-    the framework's own cost per control step, resets included.
+    the framework's own cost per control step, resets at the benchmark's rate included;
+    steady ms: the same over the steps where no world started an episode; reset ms: what a
+    step where every world started one costs beyond that (on Warp's CPU device only).
   d2h/step: calls per step that copy a device array to the host (Warp `.numpy()`/`.list()`,
     torch `.cpu()`/`.item()`/...), counted over the run (on Warp's CPU device they cost no
-    copy, but would on CUDA).
-Fit: framework ms = fixed + per-world-step µs * num_envs, least squares over the sizes
-  (goal: <= 2 ms fixed, <= 0.25 µs per world-step).
+    copy, but would on CUDA): the refill's read of the episode counters, every 8 steps.
+  reused: episodes that started from a reused initial state / episodes started.
+Fit, least squares over the sizes: steady ms = fixed + µs per world-step * num_envs, the
+  same for a reset of all worlds, and both together at the tasks' natural reset rate (every
+  250 control steps; goal: <= 2 ms fixed, <= 0.25 µs per world-step).
 Table 2: initial states per second of the producers (the CPU task's initializers), threads
   and processes, 1 and 2 workers.
 Baselines (`--baselines`), on this machine's cores: the threaded CPU vector env (one
@@ -57,6 +61,9 @@ from composer import batch as composer_batch  # noqa: E402
 from composer.batch import initial_states  # noqa: E402
 from manipulation import batch  # noqa: E402
 from manipulation.tasks import registry  # noqa: E402
+
+# A manipulation episode: 10 s of 0.04 s control steps.
+_NATURAL_EPISODE_STEPS = 250
 
 _PHYSICS_CALLS = ("step", "step1", "step2", "forward", "set_state", "get_state", "reset_data")
 
@@ -115,6 +122,7 @@ class _HostCopies:
 
 
 def _batch_row(task: str, num_envs: int, args) -> dict:
+    on_cpu = args.device == "cpu"
     env = batch.load(
         task,
         num_envs,
@@ -122,19 +130,29 @@ def _batch_row(task: str, num_envs: int, args) -> dict:
         seed=0,
         time_limit=args.time_limit,
         namespace=args.namespace,
+        # Results stay on the device on CUDA; on the CPU NumPy's are the device's memory.
+        array_type="numpy" if on_cpu else "torch",
         check_action_values=False,
     )
     env.reset()
     action = env.hand_out(np.zeros((num_envs, *env.action_spec().shape), np.float32))
     physics = env.physics
-    for _ in range(3):  # compiles, captures graphs, warms caches
+    # Compiles, captures graphs and warms caches, through one reset of every world.
+    n_sub_steps = env.task.task.physics_steps_per_control_step
+    limit = int(round(args.time_limit / (n_sub_steps * env.task.task.physics_timestep)))
+    for _ in range(limit + 2):
         env.step(action)
     wp.synchronize_device(physics.device)
     clock, copies = _PhysicsClock(), _HostCopies()
+    framework = {True: [], False: []}  # by whether some world started an episode
     try:
         begin = time.perf_counter()
         for _ in range(args.steps):
-            env.step(action)
+            inside, start = clock.seconds, time.perf_counter()
+            time_step = env.step(action)
+            spent = time.perf_counter() - start - (clock.seconds - inside)
+            # On the CPU the step types are host memory; on CUDA looking would synchronise.
+            framework[bool(on_cpu and time_step.first().any())].append(spent)
         wp.synchronize_device(physics.device)
         elapsed = time.perf_counter() - begin
     finally:
@@ -142,10 +160,16 @@ def _batch_row(task: str, num_envs: int, args) -> dict:
     stats = env.initial_state_stats()
     env.close()
     raw = _raw_rate(physics, env.task.task.physics_steps_per_control_step, args.steps)
+    steady = 1e3 * float(np.mean(framework[False]))
+    resets = framework[True]
     return {
         "batch": args.steps * num_envs / elapsed,
         "raw": raw,
         "framework_ms": 1e3 * (elapsed - clock.seconds) / args.steps,
+        "steady_ms": steady,
+        # The framework's time of a step where every world started an episode, beyond a
+        # step where none did.
+        "reset_ms": 1e3 * float(np.mean(resets)) - steady if resets else None,
         "d2h": copies.count / args.steps,
         "reused": stats.reused,
         "started": stats.started,
@@ -259,6 +283,23 @@ def _fit(sizes, framework_ms) -> tuple[float, float]:
     return intercept, slope * 1e3
 
 
+def _print_fit(task: str, sizes, rows) -> None:
+    """The steady framework time and a reset's, each as fixed + per world, and both at the
+    tasks' natural reset rate (every world once per `_NATURAL_EPISODE_STEPS` steps)."""
+    fixed, per_world = _fit(sizes, [row["steady_ms"] for row in rows])
+    line = f"{task:<22} steady: {fixed:.2f} ms fixed + {per_world:.3f} µs/world-step"
+    if all(row["reset_ms"] is not None for row in rows):
+        reset_fixed, reset_per_world = _fit(sizes, [row["reset_ms"] for row in rows])
+        natural_fixed = fixed + reset_fixed / _NATURAL_EPISODE_STEPS
+        natural_per_world = per_world + reset_per_world / _NATURAL_EPISODE_STEPS
+        line += (
+            f"; reset of all: {reset_fixed:.2f} ms + {reset_per_world:.2f} µs/world"
+            f"; at the natural rate: {natural_fixed:.2f} ms + {natural_per_world:.3f} "
+            "µs/world-step"
+        )
+    print(line)
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--device", default="cpu", help="Warp device: cpu or cuda:0")
@@ -280,21 +321,20 @@ def main() -> None:
     )
     print(
         f"{'task':<22} {'num_envs':>8} {'batch/s':>9} {'raw/s':>9} {'overhead':>8} "
-        f"{'frame ms':>8} {'d2h/step':>8} {'reused':>11}"
+        f"{'frame ms':>8} {'steady ms':>9} {'reset ms':>8} {'d2h/step':>8} {'reused':>11}"
     )
     for task in tasks:
-        framework = []
-        for num_envs in sizes:
-            row = _batch_row(task, num_envs, args)
-            framework.append(row["framework_ms"])
+        rows = [_batch_row(task, num_envs, args) for num_envs in sizes]
+        for num_envs, row in zip(sizes, rows):
+            reset = "-" if row["reset_ms"] is None else f"{row['reset_ms']:.2f}"
             print(
                 f"{task:<22} {num_envs:>8} {row['batch']:>9.0f} {row['raw']:>9.0f} "
                 f"{row['raw'] / row['batch']:>8.2f} {row['framework_ms']:>8.2f} "
-                f"{row['d2h']:>8.3f} {row['reused']:>5}/{row['started']:<5}"
+                f"{row['steady_ms']:>9.2f} {reset:>8} {row['d2h']:>8.3f} "
+                f"{row['reused']:>5}/{row['started']:<5}"
             )
         if len(sizes) > 1:
-            fixed, per_world = _fit(sizes, framework)
-            print(f"{task:<22} framework fit: {fixed:.2f} ms fixed + {per_world:.3f} µs/world-step")
+            _print_fit(task, sizes, rows)
     print()
     print(f"{'task':<22} {'producers':>12} {'workers':>7} {'states/s':>9}")
     for task in tasks:

@@ -132,9 +132,14 @@ class BatchPhysics:
             self.state_size = mujoco.mj_stateSize(self.mj_model, _STATE_SPEC)
             self._states = warp.zeros((self.num_envs, self.state_size), dtype=warp.float32)
         self._fields: dict[tuple[str, str], FieldView] = {}
-        self._world_arrays = list(
-            zip(_per_world_arrays(warp, self._scratch), _per_world_arrays(warp, self.warp_data))
-        )
+        # forward(mask) copies the chosen worlds back with these launches, recorded once.
+        self._forward_mask = warp.zeros(self.num_envs, dtype=warp.bool, device=self.device)
+        self._copy_back = [
+            _copy_worlds_launch(self._forward_mask, source, target)
+            for source, target in zip(
+                _per_world_arrays(warp, self._scratch), _per_world_arrays(warp, self.warp_data)
+            )
+        ]
         self._acc_sensors = self._acc_sensor_mask()
         self._static_geoms = self._moving_static_geoms()
         self._saved_sensordata = None
@@ -306,13 +311,15 @@ class BatchPhysics:
                     mjw.forward(model, self.warp_data)
                     return
                 active = self.warp_mask(mask)
+                if active.ptr != self._forward_mask.ptr:
+                    wp.copy(self._forward_mask, active)
                 mjw.get_state(model, self.warp_data, self._states, _STATE_SPEC)
                 mjw.set_state(model, self._scratch, self._states, _STATE_SPEC, active)
                 if self._static_geoms is not None:
                     self._place_static_geoms(self._scratch)
                 mjw.forward(model, self._scratch)
-                for source, target in self._world_arrays:
-                    _copy_worlds(active, source, target)
+                for launch in self._copy_back:
+                    launch.launch()
         finally:
             option.disableflags = flags
 
@@ -350,14 +357,16 @@ def _per_world_arrays(wp, data) -> list:
     return arrays
 
 
-def _copy_worlds(keep, source, target) -> None:
-    """Copies the worlds where `keep` is true from `source` to `target` (same shapes)."""
+def _copy_worlds_launch(keep, source, target):
+    """A recorded launch that copies the worlds where `keep` is true from `source` to
+    `target` (same shapes), by whole 4-byte words where a world's row allows it."""
     wp = _warp.load()[0]
-    source_bytes = kernels.rows(source, wp.uint8, source.shape[0])
-    target_bytes = kernels.rows(target, wp.uint8, target.shape[0])
-    wp.launch(
+    nworld = source.shape[0]
+    word = wp.int32 if (source.capacity // nworld) % 4 == 0 else wp.uint8
+    return wp.launch(
         kernels.kernels().copy_worlds,
-        dim=source_bytes.shape,
-        inputs=[keep, source_bytes, target_bytes],
+        dim=nworld,
+        inputs=[keep, kernels.rows(source, word, nworld), kernels.rows(target, word, nworld)],
         device=target.device,
+        record_cmd=True,
     )
