@@ -22,7 +22,12 @@ Table 1, for each task and num_envs:
 Fit, least squares over the sizes: steady ms = fixed + µs per world-step * num_envs, the
   same for a reset of all worlds, and both together at the tasks' natural reset rate (every
   250 control steps; goal: <= 2 ms fixed, <= 0.25 µs per world-step).
-Table 2: initial states per second of the producers (the CPU task's initializers), threads
+Table 2, the framework alone: `step` with MuJoCo Warp's physics calls replaced by no-ops,
+  `--framework-steps` steps at the tasks' own 10 s time limit (so every world resets once,
+  at its natural rate), for `--framework-envs`; fitted as fixed ms + µs per world-step
+  (goal: <= 2 ms fixed, <= 0.25 µs per world-step). The wall-clock difference of table 1
+  is the same quantity with the physics running, noisier by the physics' own variation.
+Table 3: initial states per second of the producers (the CPU task's initializers), threads
   and processes, 1 and 2 workers.
 Baselines (`--baselines`), on this machine's cores: the threaded CPU vector env (one
   sub-environment per core) and the mj_step ceiling (one thread per core, raw
@@ -31,8 +36,10 @@ Baselines (`--baselines`), on this machine's cores: the threaded CPU vector env 
 
 Usage: python benchmarks/batch_env.py [--device cpu|cuda:0] [--num-envs 64,256]
   [--steps 50] [--tasks reach_site_features,lift_brick_features] [--namespace numpy|torch]
-  [--baselines] [--producer-states 64]. On Warp's CPU device the default num_envs are 64 and
-  256 (a control step of 256 lift worlds takes about half a second there).
+  [--baselines] [--producer-states 64] [--state-workers 1] [--state-processes]
+  [--framework-envs 64,256,1024,4096] [--framework-steps 300]. On Warp's CPU device the
+  default num_envs are 64 and 256 (a control step of 256 lift worlds takes about half a
+  second there).
 """
 
 import argparse
@@ -65,7 +72,16 @@ from manipulation.tasks import registry  # noqa: E402
 # A manipulation episode: 10 s of 0.04 s control steps.
 _NATURAL_EPISODE_STEPS = 250
 
-_PHYSICS_CALLS = ("step", "step1", "step2", "forward", "set_state", "get_state", "reset_data")
+_PHYSICS_CALLS = (
+    "step",
+    "step1",
+    "step2",
+    "forward",
+    "kinematics",
+    "set_state",
+    "get_state",
+    "reset_data",
+)
 
 
 class _PhysicsClock:
@@ -133,6 +149,8 @@ def _batch_row(task: str, num_envs: int, args) -> dict:
         # Results stay on the device on CUDA; on the CPU NumPy's are the device's memory.
         array_type="numpy" if on_cpu else "torch",
         check_action_values=False,
+        state_workers=args.state_workers,
+        state_processes=args.state_processes,
     )
     env.reset()
     action = env.hand_out(np.zeros((num_envs, *env.action_spec().shape), np.float32))
@@ -283,6 +301,40 @@ def _fit(sizes, framework_ms) -> tuple[float, float]:
     return intercept, slope * 1e3
 
 
+def _framework_alone(task: str, num_envs: int, args) -> float:
+    """ms per control step of `BatchEnvironment.step` with MuJoCo Warp's physics calls
+    replaced by no-ops: the framework's own work on the caller's thread (observations,
+    rewards, counters, resets and their copies, refills), at the task's own time limit."""
+    env = batch.load(
+        task,
+        num_envs,
+        device=args.device,
+        seed=0,
+        array_type="numpy" if args.device == "cpu" else "torch",
+        namespace=args.namespace,
+        check_action_values=False,
+        state_workers=args.state_workers,
+        state_processes=args.state_processes,
+    )
+    env.reset()
+    action = env.hand_out(np.zeros((num_envs, *env.action_spec().shape), np.float32))
+    env.step(action)
+    originals = {name: getattr(mjw, name) for name in _PHYSICS_CALLS}
+    for name in _PHYSICS_CALLS:
+        setattr(mjw, name, lambda *args, **kwargs: None)
+    try:
+        wp.synchronize_device(env.physics.device)
+        begin = time.perf_counter()
+        for _ in range(args.framework_steps):
+            env.step(action)
+        wp.synchronize_device(env.physics.device)
+        return 1e3 * (time.perf_counter() - begin) / args.framework_steps
+    finally:
+        for name, original in originals.items():
+            setattr(mjw, name, original)
+        env.close()
+
+
 def _print_fit(task: str, sizes, rows) -> None:
     """The steady framework time and a reset's, each as fixed + per world, and both at the
     tasks' natural reset rate (every world once per `_NATURAL_EPISODE_STEPS` steps)."""
@@ -309,12 +361,24 @@ def main() -> None:
     parser.add_argument("--time-limit", type=float, default=1.0, help="seconds per episode")
     parser.add_argument("--namespace", default=None, help="task code on numpy or torch")
     parser.add_argument("--baselines", action="store_true", help="threaded CPU and mj_step")
+    parser.add_argument("--state-workers", type=int, default=1, help="initial-state producers")
+    parser.add_argument(
+        "--framework-envs", default="64,256,1024,4096", help="num_envs of the framework table"
+    )
+    parser.add_argument(
+        "--framework-steps", type=int, default=300, help="steps per framework measurement"
+    )
+    parser.add_argument(
+        "--state-processes", action="store_true", help="producers in processes, not threads"
+    )
     parser.add_argument("--producer-states", type=int, default=64, help="states per timing")
     args = parser.parse_args()
     default_sizes = "64,256" if args.device == "cpu" else "1024,4096,8192"
     sizes = [int(n) for n in (args.num_envs or default_sizes).split(",")]
     tasks = args.tasks.split(",")
+    producers = f"{args.state_workers} {'processes' if args.state_processes else 'threads'}"
     print(
+        f"producers {producers}, "
         f"device {args.device}, namespace {args.namespace or 'default'}, {args.steps} steps per "
         f"row, time limit {args.time_limit} s, {os.cpu_count()} cores, load average "
         f"{os.getloadavg()[0]:.2f}"
@@ -335,6 +399,19 @@ def main() -> None:
             )
         if len(sizes) > 1:
             _print_fit(task, sizes, rows)
+    print()
+    print(
+        f"framework alone (physics calls as no-ops), {args.framework_steps} steps, resets at the "
+        f"tasks' 10 s limit ({_NATURAL_EPISODE_STEPS} steps)"
+    )
+    print(f"{'task':<22} {'num_envs':>8} {'ms/step':>8}")
+    framework_sizes = [int(n) for n in args.framework_envs.split(",")]
+    for task in tasks:
+        times = [_framework_alone(task, n, args) for n in framework_sizes]
+        for num_envs, milliseconds in zip(framework_sizes, times):
+            print(f"{task:<22} {num_envs:>8} {milliseconds:>8.3f}")
+        fixed, per_world = _fit(framework_sizes, times)
+        print(f"{task:<22} fit: {fixed:.3f} ms fixed + {per_world:.4f} µs/world-step")
     print()
     print(f"{'task':<22} {'producers':>12} {'workers':>7} {'states/s':>9}")
     for task in tasks:

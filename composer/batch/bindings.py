@@ -107,7 +107,10 @@ def _bound(field: FieldView, index) -> Any:
     values = field.read()[:, index]
     if field._physics.arrays.library != "numpy":
         return values
-    array = np.array(values).view(_BatchArray)
+    # A read is a snapshot: a basic index gives a view of the device memory, to be copied;
+    # an index array has gathered a copy already.
+    basic = isinstance(index, (int, slice, np.integer))
+    array = (np.array(values) if basic else values).view(_BatchArray)
     array._field = field
     array._index = index
     return array

@@ -191,7 +191,7 @@ class BatchEnvironment:
         task_factory: Callable[[], composer.Task] | None = None,
         state_workers: int = 1,
         state_processes: bool = False,
-        slots_per_world: int = 2,
+        slots_per_world: int = 3,
         refill_interval: int = 8,
         check_action_values: bool | None = None,
         namespace: str | None = None,

@@ -18,7 +18,7 @@ def kernels() -> SimpleNamespace:
     """The kernels, compiled by Warp at their first launch.
 
     Returns:
-      A namespace with `restore_columns`, `copy_worlds`, `count_nonfinite`,
+      A namespace with `save_columns`, `restore_columns`, `copy_worlds`, `count_nonfinite`,
       `contact_worlds`, `take_slots`, `count_episodes` and `static_geom_poses`
       (documented on each).
     """
@@ -43,26 +43,37 @@ def rows(array, dtype, nrows: int):
 
 def _define(wp) -> SimpleNamespace:
     @wp.kernel(module="unique")
+    def save_columns(
+        columns: wp.array(dtype=wp.int32),
+        source: wp.array2d(dtype=wp.float32),
+        saved: wp.array2d(dtype=wp.float32),
+    ):
+        """saved[world, k] = source[world, columns[k]]."""
+        world, k = wp.tid()
+        saved[world, k] = source[world, columns[k]]
+
+    @wp.kernel(module="unique")
     def restore_columns(
         columns: wp.array(dtype=wp.int32),
         saved: wp.array2d(dtype=wp.float32),
         target: wp.array2d(dtype=wp.float32),
     ):
-        """target[world, c] = saved[world, c] for each c in `columns`."""
+        """target[world, columns[k]] = saved[world, k]: what `save_columns` saved."""
         world, k = wp.tid()
-        column = columns[k]
-        target[world, column] = saved[world, column]
+        target[world, columns[k]] = saved[world, k]
 
     @wp.kernel(module="unique")
     def copy_worlds(
         keep: wp.array(dtype=wp.bool),
-        source: wp.array2d(dtype=wp.uint8),
-        target: wp.array2d(dtype=wp.uint8),
+        source: wp.array2d(dtype=Any),
+        target: wp.array2d(dtype=Any),
     ):
-        """Copies the bytes of the worlds where `keep` is true from `source` to `target`."""
-        world, k = wp.tid()
+        """Copies the rows of the worlds where `keep` is true from `source` to `target`; a
+        world that is not kept costs one read of `keep`."""
+        world = wp.tid()
         if keep[world]:
-            target[world, k] = source[world, k]
+            for k in range(source.shape[1]):
+                target[world, k] = source[world, k]
 
     @wp.kernel(module="unique")
     def count_nonfinite(values: wp.array2d(dtype=Any), count: wp.array(dtype=wp.int32)):
@@ -174,6 +185,7 @@ def _define(wp) -> SimpleNamespace:
         geom_xmat[world, geom] = quat_to_mat(rotation)
 
     return SimpleNamespace(
+        save_columns=save_columns,
         restore_columns=restore_columns,
         copy_worlds=copy_worlds,
         count_nonfinite=count_nonfinite,

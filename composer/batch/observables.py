@@ -45,7 +45,8 @@ def batch_reader(observable: base.Observable, physics) -> Reader:
 class FieldSelection:
     """An observable that is a fixed selection of one field's entries in every world.
 
-    Calling it gathers the selection on the device (`xp.take`), in the batch's namespace.
+    Calling it reads the selection on the device, in the batch's namespace: a view of a run
+    of consecutive entries, or a gather (`xp.take`) of others.
 
     Args:
       field: the batched MjModel/MjData field (`BatchPhysics.field`).
@@ -57,13 +58,21 @@ class FieldSelection:
         self._physics = physics
         self._field = field
         self._shape = columns.shape
-        self._columns = physics.arrays.asarray(np.asarray(columns).ravel().astype(np.int64))
+        flat = np.asarray(columns).ravel().astype(np.int64)
+        contiguous = flat.size and np.array_equal(flat, np.arange(flat[0], flat[0] + flat.size))
+        # A run of consecutive entries (a body's position, an arm's joints) is a slice: a
+        # view, where a gather would copy.
+        self._slice = slice(int(flat[0]), int(flat[0]) + flat.size) if contiguous else None
+        self._columns = None if contiguous else physics.arrays.asarray(flat)
 
     def __call__(self):
         xp, physics = self._physics.xp, self._physics
         values = self._field.read()
         flat = xp.reshape(values, (values.shape[0], -1))
-        taken = xp.take(flat, self._columns, axis=1)
+        if self._slice is not None:
+            taken = flat[:, self._slice]
+        else:
+            taken = xp.take(flat, self._columns, axis=1)
         return xp.reshape(taken, (physics.num_envs, *self._shape))
 
 

@@ -245,22 +245,31 @@ class BatchPhysics:
         mjw.step2(model, data)
         for _ in range(n_sub_steps - 1):
             mjw.step(model, data)
-        if self._acc_sensors is not None:
-            wp.copy(self._saved_sensordata, data.sensordata)
+        acc = self._acc_sensors
+        if acc is not None:
+            wp.launch(
+                kernels.kernels().save_columns,
+                dim=(self.num_envs, acc.shape[0]),
+                inputs=[acc, data.sensordata, self._saved_sensordata],
+                device=self.device,
+            )
         mjw.step1(model, data)
-        if self._acc_sensors is not None:
+        if acc is not None:
             wp.launch(
                 kernels.kernels().restore_columns,
-                dim=(self.num_envs, self._acc_sensors.shape[0]),
-                inputs=[self._acc_sensors, self._saved_sensordata, data.sensordata],
+                dim=(self.num_envs, acc.shape[0]),
+                inputs=[acc, self._saved_sensordata, data.sensordata],
                 device=self.device,
             )
 
     def step(self, n_sub_steps: int = 1) -> None:
         """Advances every world by `n_sub_steps` physics steps (a CUDA graph on GPU)."""
         wp = self._wp
-        if self._acc_sensors is not None and self._saved_sensordata is None:
-            self._saved_sensordata = wp.zeros_like(self.warp_data.sensordata)
+        acc = self._acc_sensors
+        if acc is not None and self._saved_sensordata is None:
+            self._saved_sensordata = wp.zeros(
+                (self.num_envs, acc.shape[0]), dtype=wp.float32, device=self.device
+            )
         self.run_captured(("step", n_sub_steps), lambda: self._control_step(n_sub_steps))
 
     def run_captured(self, key, work: Callable[[], None]) -> None:

@@ -6,17 +6,18 @@ device: copy each chosen world's slot into its state (`mujoco_warp.set_state` wi
 its batched model rows and its episode values, and count the episode. The host never learns
 which worlds reset at that step.
 
-Refilling (the one rule for producers): a reset of every world (`refill(wait=True)`) fills
-every slot of every world and waits for it. After that, every `refill_interval` control
-steps the host reads how many episodes each world has started (one (2, num_envs) int32
-device-to-host copy), uploads the states its producers finished (waiting for them if they
-are not done: the caller waits rather than change the distribution), and asks the producers
-for the states that fill the slots freed since; at other steps, states the producers have
-finished are uploaded without waiting (host to device only). A world that starts an episode
-whose state is not uploaded yet starts it from the state in its slot, the one it used
-`slots_per_world` episodes before: the device counts each such reuse exactly
-(`StateSlots.stats`), and the first one is warned about. Worlds whose episodes last at
-least `refill_interval` steps never reuse a state when the producers keep up.
+Refilling (the one rule for producers): the first reset of every world fills every slot
+and waits for it; a later one (`refill(wait=True)`) puts every world's next episode on the
+device, waiting for it, and asks for the other slots' states in the background. After
+that, every `refill_interval` control steps the host reads how many episodes each world
+has started (one (2, num_envs) int32 device-to-host copy) and asks the producers for the
+states of the slots freed since. It waits for the producers only when some world's next
+episode has no state on the device (the caller waits rather than change the
+distribution); at other steps, states the producers have finished are uploaded without
+waiting (host to device only). A world that still starts an episode whose state is not
+uploaded (it started more than `slots_per_world` episodes between two refills) starts it
+from the state in its slot, the one it used `slots_per_world` episodes before: the device
+counts each such reuse exactly (`StateSlots.stats`), and the first one is warned about.
 """
 
 import time
@@ -78,7 +79,7 @@ class StateSlots:
         random_states: list,
         *,
         model_fields: Sequence[str],
-        slots_per_world: int = 2,
+        slots_per_world: int = 3,
         refill_interval: int = 8,
     ):
         wp = _warp.load()[0]
@@ -201,19 +202,35 @@ class StateSlots:
     def refill(self, *, wait: bool) -> None:
         """Uploads finished states and asks for the ones freed since the last refill.
 
+        Waits for the producers only where it must: when some world's next episode has no
+        state on the device (or with `wait`).
+
         Args:
-          wait: fill every slot of every world before returning (a reset of every world
-            needs its next episode; the producers then have nothing left to catch up).
+          wait: make sure every world's next episode is on the device before returning (a
+            reset of every world needs it); the other slots fill in the background.
         """
         self._steps = 0
         started, reused = self._counters.numpy().astype(np.int64)
-        self._collect()
+        self._warn_about_reuse(int(reused.sum()))
+        if self._pending is not None:
+            lacking = bool(np.any(self._uploaded <= started))
+            if not (wait or lacking or self._pending.done()):
+                return  # every world has its next state; the producers are still at work
+            self._collect()
+        # The first fill fills every slot: a slot must never hold a state no world had.
+        first_fill = not self._uploaded.any()
+        if wait and not first_fill:
+            jobs = self._jobs(started, started + 1)
+            if jobs:
+                self._pending = self._producer.submit(jobs)
+                self._collect()
         jobs = self._jobs(started, started + self.slots_per_world)
         if jobs:
             self._pending = self._producer.submit(jobs)
-            if wait:
+            if wait and first_fill:
                 self._collect()
-        total = int(reused.sum())
+
+    def _warn_about_reuse(self, total: int) -> None:
         if total and not self._warned:
             self._warned = True
             warnings.warn(
@@ -222,7 +239,7 @@ class StateSlots:
                 "slots_per_world, a smaller refill_interval or more state_workers "
                 "(BatchEnvironment.initial_state_stats() counts them)",
                 RuntimeWarning,
-                stacklevel=4,
+                stacklevel=5,
             )
 
     def _jobs(self, started: np.ndarray, end: np.ndarray) -> list[Job]:
