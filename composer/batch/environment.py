@@ -371,8 +371,12 @@ class BatchEnvironment:
         self._steps = xp.zeros_like(self._steps)
         self._ended = xp.zeros_like(self._ended)
         self._discount = self._one
+        # New arrays, as every step's: the caller may keep or change them.
         return self._time_step(
-            self._step_types[_FIRST], self._zero, self._one, self._observables.read()
+            xp.asarray(self._step_types[_FIRST], copy=True),
+            xp.zeros_like(self._zero),
+            xp.ones_like(self._one),
+            self._observables.read(),
         )
 
     def _time_step(self, step_type, reward, discount, observation) -> BatchTimeStep:

@@ -176,3 +176,17 @@ def test_without_a_gpu_the_default_device_is_the_cpu_with_a_warning():
 def test_unknown_autoreset_mode_is_refused_by_name():
     with pytest.raises(ValueError, match=r"autoreset_mode: expected one of .*got 'later'"):
         BatchEnvironment(Reach(observation_settings.FEATURES), 2, autoreset_mode="later")
+
+
+def test_changing_what_reset_returned_changes_no_later_step():
+    env = manipulation_batch.load(NAME, 2, seed=6, time_limit=CONTROL_TIMESTEP)
+    first = env.reset()
+    first.reward[...] = 7.0
+    first.discount[...] = 7.0
+    first.step_type[...] = 2
+    actions = _actions(env, 2)
+    env.step(actions[0])  # LAST: the one-step limit
+    restarted = env.step(actions[1])  # FIRST, reward 0 and discount 1 by definition
+    np.testing.assert_array_equal(restarted.step_type, [0, 0])
+    np.testing.assert_array_equal(restarted.reward, [0.0, 0.0])
+    np.testing.assert_array_equal(restarted.discount, [1.0, 1.0])
