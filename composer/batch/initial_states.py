@@ -17,7 +17,7 @@ import concurrent.futures
 import multiprocessing
 import threading
 from collections.abc import Callable, Sequence
-from typing import Any, NamedTuple
+from typing import NamedTuple
 
 import mujoco
 import numpy as np
@@ -26,7 +26,7 @@ import composer
 import mjcf
 from composer.hooks import EnvironmentHooks
 
-__all__ = ["InitialState", "Job", "JobResult", "StateMaker", "StateProducer"]
+__all__ = ["InitialState", "Job", "JobResult", "StateMaker", "StateProducer", "Submitted"]
 
 _STATE_SPEC = mujoco.mjtState.mjSTATE_INTEGRATION
 
@@ -236,39 +236,35 @@ class StateProducer:
             )
             self._run = run
 
-    def submit(self, jobs: Sequence[Job]) -> "concurrent.futures.Future[list[JobResult]]":
-        """Starts `jobs` on the workers; the future's result lists every job's result.
+    def submit(self, jobs: Sequence[Job]) -> "Submitted":
+        """Starts `jobs` on the workers; the `Submitted`'s result lists every job's result.
 
         Jobs are split into one share per worker; a world's episodes stay in one job.
         """
         shares = [list(jobs[i :: self.workers]) for i in range(self.workers)]
         futures = [self._pool.submit(self._run, share) for share in shares if share]
-        return _gathered(futures)
+        return Submitted(futures)
 
     def close(self) -> None:
         """Stops the workers (pending jobs are cancelled)."""
         self._pool.shutdown(wait=True, cancel_futures=True)
 
 
-def _gathered(futures: list) -> "concurrent.futures.Future[list[JobResult]]":
-    """One future for the concatenated results of `futures`."""
-    out: concurrent.futures.Future[Any] = concurrent.futures.Future()
-    if not futures:
-        out.set_result([])
-        return out
-    remaining = [len(futures)]
-    lock = threading.Lock()
+class Submitted:
+    """The shares of one `StateProducer.submit`, in flight on the workers."""
 
-    def done(_):
-        with lock:
-            remaining[0] -= 1
-            if remaining[0]:
-                return
-        try:
-            out.set_result([result for f in futures for result in f.result()])
-        except BaseException as error:  # the workers' error, raised where the result is read
-            out.set_exception(error)
+    def __init__(self, futures: list):
+        self._futures = futures
 
-    for future in futures:
-        future.add_done_callback(done)
-    return out
+    def done(self) -> bool:
+        """Whether every share has finished."""
+        return all(future.done() for future in self._futures)
+
+    def result(self, timeout: float) -> list[JobResult]:
+        """Every job's result, waiting at most `timeout` seconds in all.
+
+        Raises:
+          TimeoutError: when the workers are not done by then; a worker's own error.
+        """
+        concurrent.futures.wait(self._futures, timeout)
+        return [result for future in self._futures for result in future.result(timeout=0)]
