@@ -25,6 +25,12 @@ TENDON = "tendon"
 WORLDBODY = "worldbody"
 MUJOCO = "mujoco"
 
+# Sections whose unnamed elements (file assets aside, which MuJoCo names after their file)
+# are written with their generated name only once something refers to them or asks for
+# their name: MuJoCo rejects most of them nameless, and one that nothing uses should fail
+# as it would in MuJoCo rather than compile under a name the user never gave.
+NAMED_ON_DEMAND_SECTIONS = ("asset", "custom")
+
 # Namespace under which attachment frames are found by `find`.
 ATTACHMENT_FRAME = "attachment_frame"
 

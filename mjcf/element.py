@@ -221,8 +221,17 @@ class Element:
     def _unnamed_id(self) -> str:
         auto_id = self._auto_id
         if auto_id is None:
-            auto_id = self._root._namescope.next_unnamed(self._spec.namespace, self)
+            scope = self._root._namescope
+            auto_id = scope.next_unnamed(self._spec.namespace, self)
             _set_slot(self, "_auto_id", auto_id)
+            parent = self._parent
+            if (
+                parent is not None
+                and parent._spec.name in constants.NAMED_ON_DEMAND_SECTIONS
+                and "file" not in self._attributes
+            ):
+                # Its written text now carries the generated name (see `xml_writer`).
+                scope.naming_changed()
         return auto_id
 
     def _describe(self) -> str:
@@ -1240,6 +1249,9 @@ _CLASS_ATTRIBUTES = frozenset(
     if isinstance(value, property)
 )
 
+# dm_control compatibility, not our API: its private name for the element class, which MoMa
+# imports.
+_ElementImpl = Element
 
 # These modules implement what the element classes' methods delegate to (XML writing,
 # `attach`, copying, reference resolution), and they build and inspect elements, so they

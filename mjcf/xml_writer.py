@@ -27,9 +27,13 @@ Caches, and what invalidates them (the one place these rules are written down):
 
 A whole model is written so that every compiled object is addressable: unnamed elements that
 compile to a named object get a generated name, and every element that accepts a default
-class names its class explicitly. Each model's global defaults live in a class named after
-its scope prefix ('/' for the top model, 'child/' for a model attached as 'child'), so the
-defaults of one model never leak into another.
+class names its class explicitly. Unnamed `<asset>` and `<custom>` elements other than file
+assets are the exception: one is written nameless, as the user gave it, until something
+refers to it or asks for its name. Its generated name is made then, which renews the naming
+stamp; when that happens during a write (the asset was already written nameless above the
+reference), `element_to_string` writes the text again. Each model's global defaults live in
+a class named after its scope prefix ('/' for the top model, 'child/' for a model attached
+as 'child'), so the defaults of one model never leak into another.
 """
 
 from __future__ import annotations
@@ -52,9 +56,7 @@ _DEFAULT = constants.DEFAULT
 _JOINT = constants.JOINT
 _MAIN = "main"
 _WORLD = "world"
-# Sections whose elements MuJoCo only ever finds by the name the user gave (or, for file
-# assets, by their file name): their unnamed elements are written unnamed.
-_NAMED_BY_USER = ("asset", "custom")
+_NAMED_ON_DEMAND = constants.NAMED_ON_DEMAND_SECTIONS
 _BODY = constants.BODY
 _TOP_ONLY_SECTIONS = ("statistic",)
 # An actuator shortcut (<position/>, <intvelocity/>, ...) in a default class sets the class's
@@ -330,9 +332,14 @@ class _Writer:
             elif spec.namespace == _JOINT:
                 # An attachment frame's first unnamed joint is named after the frame.
                 name_text = f' name="{_escape(element._generated_name(prefix))}"'
-            elif element._parent._spec.name in _NAMED_BY_USER and "file" not in attributes:
-                # MuJoCo decides whether such an element needs a name (a material does, a
-                # skybox texture does not); a generated one would hide its error.
+            elif (
+                element._auto_id is None
+                and element._parent._spec.name in _NAMED_ON_DEMAND
+                and "file" not in attributes
+            ):
+                # Nothing refers to it yet: MuJoCo decides whether it needs a name (a
+                # material does, a skybox texture does not), and a generated one would hide
+                # that error. The first reference gives it one (see `element_to_string`).
                 pass
             else:
                 auto_id = element._auto_id or element._unnamed_id()
@@ -690,10 +697,20 @@ def element_to_string(
     limit = sys.getrecursionlimit()
     if limit < _FRAMES_NEEDED:
         sys.setrecursionlimit(_FRAMES_NEEDED)
+    scope = element._root._namescope
+    stamp = scope.naming_stamp
     try:
-        return _element_to_string(
+        text = _element_to_string(
             element, prefix_root, self_close, pretty_print, precision, zero_threshold
         )
+        if scope.naming_stamp != stamp:
+            # A reference met while writing gave an unnamed asset, written nameless further
+            # up, its generated name (which renews the stamp of its model and of the models
+            # above it). Every reference has its name now, so a second write is final.
+            text = _element_to_string(
+                element, prefix_root, self_close, pretty_print, precision, zero_threshold
+            )
+        return text
     except RecursionError:
         raise ValueError(
             f"{element._describe()}: elements nest too deeply to write "

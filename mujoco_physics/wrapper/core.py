@@ -1,8 +1,10 @@
 """`MjModel`/`MjData` with dm_control's interface (`ptr`, `name2id`, `disable`, the
 named constructors), the global callbacks, and the visualisation structs with `ptr`.
 
-Served as `dm_control.mujoco.wrapper.core`. Attribute reads are forwarded to the wrapped
-MuJoCo object; arrays whose size cannot change (every MjModel array, and the MjData arrays
+Served as `dm_control.mujoco.wrapper.core`. Every field of the wrapped MuJoCo struct is a
+class attribute of its wrapper (`MjModel.geom_pos`, with MuJoCo's description of the field as
+its docstring), made from the installed `mujoco`; other attribute reads are forwarded to the
+wrapped object. Arrays whose size cannot change (every MjModel array, and the MjData arrays
 sized by model counts) are cached on first read, so later reads are plain
 instance-dictionary hits and return the same NumPy view.
 """
@@ -15,8 +17,13 @@ from collections.abc import Callable, Iterator
 
 import mujoco
 import numpy as np
+from mujoco.introspect import structs as _introspect
 
 from mujoco_physics import field_layout
+
+# dm_control's name for the module of MuJoCo's functions, which clients reach through
+# `wrapper.core.mjlib` (`core.mjlib.mjv_defaultOption(core.MjvOption().ptr)`).
+from mujoco_physics.wrapper.mjbindings import mjlib  # noqa: F401
 
 # The name under which MJB bytes are handed to MuJoCo in a one-file virtual file system.
 _MJB_NAME = "model.mjb"
@@ -89,10 +96,83 @@ def flags_set(opt, field: str, bits: int) -> Iterator[None]:
         setattr(opt, field, previous)
 
 
+class _StructField:
+    """One field of the wrapped MuJoCo struct, as a class attribute of its wrapper.
+
+    Read on an instance, it forwards to the wrapped struct and keeps a fixed-size array in
+    the instance dictionary. It is a non-data descriptor, so the instance dictionary comes
+    first: later reads are plain dictionary hits that never reach it, and writes go through
+    the wrapper's `__setattr__`. Read on the class, it is the field's documented `property`
+    (`help(MjModel.geom_pos)`), as dm_control's wrappers have.
+    """
+
+    __slots__ = ("_name", "_cached", "_property")
+
+    def __init__(self, name: str, cached: bool, doc: str, settable: bool):
+        self._name = name
+        self._cached = cached
+        self._property = property(self.__get__, _field_setter(name) if settable else None, doc=doc)
+
+    def __get__(self, instance, owner=None):
+        if instance is None:
+            return self._property
+        value = getattr(instance._ptr, self._name)
+        if self._cached:
+            instance.__dict__[self._name] = value
+        return value
+
+
+def _field_setter(name: str) -> Callable:
+    def set_field(wrapper, value) -> None:
+        setattr(wrapper, name, value)
+
+    return set_field
+
+
+# The array fields' extents, named after model sizes ('ngeom', 3), for the docstrings.
+_EXTENTS = {mujoco.MjModel: field_layout.MODEL_EXTENTS, mujoco.MjData: field_layout.DATA_EXTENTS}
+
+
+def _struct_fields(wrapper: type, struct: type) -> dict[str, _StructField]:
+    """A `_StructField` for each field of `struct` (`mujoco.MjModel`) that `wrapper` and its
+    bases do not define themselves, documented from `mujoco.introspect`."""
+    # mujoco.MjModel is MuJoCo's mjModel.
+    declared = _introspect.STRUCTS.get("mj" + struct.__name__[len("Mj") :])
+    docs = {field.name: field.doc for field in declared.fields} if declared else {}
+    extents = _EXTENTS.get(struct, {})
+    fields = {}
+    for name, descriptor in vars(struct).items():
+        if name.startswith("_") or not isinstance(descriptor, property):
+            continue
+        if any(name in vars(base) for base in wrapper.__mro__):
+            continue
+        settable = descriptor.fset is not None
+        notes = (
+            f"Forwarded to `mujoco.{struct.__name__}.{name}`{'' if settable else ', read-only'}."
+        )
+        if name in extents:
+            notes = f"Shape ({', '.join(str(extent) for extent in extents[name])}). {notes}"
+        doc = docs.get(name) or (descriptor.__doc__ or "").strip()
+        if doc:
+            notes = f"{doc}\n\n{notes}"
+        fields[name] = _StructField(name, name in wrapper._cacheable, notes, settable)
+    return fields
+
+
 class _StructWrapper:
-    """Forwards attribute access to a MuJoCo struct and caches its fixed-size arrays."""
+    """Forwards attribute access to a MuJoCo struct and caches its fixed-size arrays.
+
+    A subclass names the struct it wraps (`class MjModel(_StructWrapper,
+    struct=mujoco.MjModel)`) and gets each of its fields as a class attribute.
+    """
 
     _cacheable: frozenset = frozenset()
+
+    def __init_subclass__(cls, *, struct: type | None = None, **kwargs):
+        super().__init_subclass__(**kwargs)
+        if struct is not None:
+            for name, field in _struct_fields(cls, struct).items():
+                setattr(cls, name, field)
 
     def __init__(self, ptr):
         object.__setattr__(self, "_ptr", ptr)
@@ -103,12 +183,10 @@ class _StructWrapper:
         return self._ptr
 
     def __getattr__(self, name):
+        # Only what is not a struct field gets here (`model.geom('name')`, `bind`).
         if name == "_ptr":
             raise AttributeError(name)
-        value = getattr(self._ptr, name)
-        if name in self._cacheable:
-            self.__dict__[name] = value
-        return value
+        return getattr(self._ptr, name)
 
     def __setattr__(self, name, value):
         self.__dict__.pop(name, None)
@@ -127,7 +205,7 @@ def _static_data_fields() -> frozenset:
     )
 
 
-class MjModel(_StructWrapper):
+class MjModel(_StructWrapper, struct=mujoco.MjModel):
     """A `mujoco.MjModel` with dm_control's helpers: `ptr`, `name2id`, `disable`.
 
     `MjModel(model)` wraps a `mujoco.MjModel`; the `from_*` constructors load one.
@@ -240,7 +318,7 @@ class MjModel(_StructWrapper):
         return f"MjModel(nbody={self._ptr.nbody}, ngeom={self._ptr.ngeom}, nq={self._ptr.nq})"
 
 
-class MjData(_StructWrapper):
+class MjData(_StructWrapper, struct=mujoco.MjData):
     """A `mujoco.MjData` with dm_control's `ptr`, a wrapped `model` and helpers.
 
     `MjData(model)` allocates data for a wrapped `MjModel`; `MjData(data)` wraps a

@@ -136,3 +136,87 @@ def test_attachment_frame_writes_its_name_after_its_pose():
     frame = parent.attach(mjcf.RootElement(model="arm"))
     frame.pos = [1, 2, 3]
     assert str(frame) == '<body pos="1 2 3" name="arm/"/>'
+
+
+def _checker_texture(model):
+    return model.asset.add(
+        "texture", type="2d", builtin="checker", width=8, height=8, rgb1=[0.2, 0.3, 0.4]
+    )
+
+
+def _written_tag(xml: str, tag: str) -> str:
+    """The first `<tag .../>` line of `xml`."""
+    return next(line.strip() for line in xml.splitlines() if line.strip().startswith(f"<{tag}"))
+
+
+def test_unnamed_texture_used_by_a_material_is_named_and_compiles():
+    root = mjcf.RootElement()
+    texture = _checker_texture(root)
+    grid = root.asset.add("material", name="grid", texture=texture, texrepeat=[5, 5])
+    root.worldbody.add("geom", type="plane", size=[2, 2, 0.1], material=grid)
+    xml = root.to_xml_string()
+    assert _written_tag(xml, "texture").startswith('<texture name="//unnamed_texture_0"')
+    physics = mjcf.Physics.from_mjcf_model(root)
+    assert physics.model.ntex == 1
+    assert physics.model.mat_texid[0][mujoco.mjtTextureRole.mjTEXROLE_RGB] == 0
+
+
+def test_unnamed_material_used_by_a_geom_compiles_and_binds():
+    root = mjcf.RootElement()
+    material = root.asset.add("material", rgba=[1, 0, 0, 1])
+    root.worldbody.add("geom", size=[1], material=material)
+    physics = mjcf.Physics.from_mjcf_model(root)
+    assert physics.model.geom_matid[0] == 0
+    assert list(physics.bind(material).rgba) == [1, 0, 0, 1]
+
+
+def test_unnamed_asset_nothing_uses_is_written_without_a_name():
+    root = mjcf.RootElement()
+    root.asset.add("texture", type="skybox", builtin="gradient", width=8, height=8)
+    xml = root.to_xml_string()
+    assert _written_tag(xml, "texture").startswith('<texture class="/" type="skybox"')
+    assert mjcf.Physics.from_mjcf_model(root).model.ntex == 1
+
+
+def test_unnamed_asset_asked_for_its_name_is_written_with_it():
+    root = mjcf.RootElement()
+    sky = root.asset.add("texture", type="skybox", builtin="gradient", width=8, height=8)
+    root.to_xml_string()
+    assert sky.full_identifier == "//unnamed_texture_0"
+    assert 'name="//unnamed_texture_0"' in _written_tag(root.to_xml_string(), "texture")
+
+
+def test_unnamed_assets_of_an_attached_model_get_scoped_names_and_compile():
+    parent = mjcf.RootElement(model="parent")
+    child = mjcf.RootElement(model="child")
+    material = child.asset.add("material", texture=_checker_texture(child))
+    child.worldbody.add("geom", size=[1], material=material)
+    parent.attach(child)
+    xml = parent.to_xml_string()
+    assert _written_tag(xml, "texture").startswith('<texture name="child//unnamed_texture_0"')
+    assert 'texture="child//unnamed_texture_0"' in _written_tag(xml, "material")
+    compiled = mjcf.Physics.from_mjcf_model(parent).model
+    assert compiled.texture("child//unnamed_texture_0").id == 0
+    assert compiled.geom_matid[0] == 0
+
+
+def test_unnamed_asset_first_referred_to_by_a_copy_is_named_in_the_same_write():
+    # The copies are linked without setting attributes, so the destination's texture is
+    # first named while the material that refers to it is written, after the texture.
+    source = mjcf.RootElement(model="source")
+    material = source.asset.add("material", name="m", texture=_checker_texture(source))
+    source.worldbody.add("geom", size=[1], material=material)
+    destination = mjcf.RootElement(model="destination")
+    destination.include_copy(source)
+    xml = destination.to_xml_string()
+    assert _written_tag(xml, "texture").startswith('<texture name="//unnamed_texture_0"')
+    assert mjcf.Physics.from_mjcf_model(destination).model.ntex == 1
+
+
+def test_exported_model_with_unnamed_used_assets_compiles(tmp_path):
+    root = mjcf.RootElement(model="exported")
+    material = root.asset.add("material", texture=_checker_texture(root))
+    root.worldbody.add("geom", size=[1], material=material)
+    mjcf.export_with_assets(root, str(tmp_path))
+    compiled = mujoco.MjModel.from_xml_path(str(tmp_path / "exported.xml"))
+    assert compiled.ntex == 1 and compiled.geom_matid[0] == 0

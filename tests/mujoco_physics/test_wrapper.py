@@ -1,10 +1,17 @@
 """Tests for mujoco_physics.wrapper: dm_control's struct wrappers, callbacks and mjbindings."""
 
+import pydoc
+import subprocess
+import sys
+import textwrap
+
 import mujoco
 import numpy as np
 import pytest
+from mujoco.introspect import structs as introspect_structs
 
 from mujoco_physics import wrapper
+from mujoco_physics.wrapper import core
 from mujoco_physics.wrapper.mjbindings import constants, enums, mjlib, sizes
 
 _XML = """
@@ -90,3 +97,91 @@ def test_mjr_context_names_a_bad_font_scale():
     with pytest.raises(ValueError) as raised:
         wrapper.MjrContext(wrapper.MjModel.from_xml_string(_XML), font_scale=99)
     assert str(raised.value) == "font_scale: expected one of [50, 100, 150, 200, 250, 300], got 99"
+
+
+def _introspect_doc(struct: str, field: str) -> str:
+    return next(f.doc for f in introspect_structs.STRUCTS[struct].fields if f.name == field)
+
+
+def _public_fields(struct: type) -> list[str]:
+    return [n for n, v in vars(struct).items() if isinstance(v, property) and n[0] != "_"]
+
+
+def test_every_field_of_the_mujoco_structs_is_a_class_attribute_of_the_wrapper():
+    for struct, wrapped in ((mujoco.MjModel, wrapper.MjModel), (mujoco.MjData, wrapper.MjData)):
+        missing = [name for name in _public_fields(struct) if name not in dir(wrapped)]
+        assert not missing, (wrapped.__name__, missing)
+        assert all(isinstance(getattr(wrapped, n), property) for n in _public_fields(struct))
+
+
+def test_model_field_on_the_class_is_a_property_documented_as_mujoco_describes_it():
+    field = type(wrapper.MjModel.from_xml_string(_XML)).geom_pos
+    assert isinstance(field, property)
+    assert field.__doc__.startswith(_introspect_doc("mjModel", "geom_pos"))
+    assert "Shape (ngeom, 3)" in field.__doc__
+    assert _introspect_doc("mjModel", "geom_pos") in pydoc.render_doc(field)
+
+
+def test_data_field_on_the_class_reads_what_the_instance_reads():
+    data = wrapper.MjData(wrapper.MjModel.from_xml_string(_XML))
+    qpos = type(data).qpos
+    assert isinstance(qpos, property)
+    assert _introspect_doc("mjData", "qpos") in qpos.__doc__
+    assert qpos.__get__(data) is data.qpos is data.qpos
+    assert np.shares_memory(data.qpos, data.ptr.qpos)
+    np.testing.assert_array_equal(data.qpos, [0, 0, 1, 1, 0, 0, 0])
+
+
+def test_settable_field_sets_the_struct_and_a_read_only_one_has_no_setter():
+    model = wrapper.MjModel.from_xml_string(_XML)
+    data = wrapper.MjData(model)
+    type(data).time.fset(data, 2.5)
+    assert data.ptr.time == 2.5
+    data.time = 3.5
+    assert type(data).time.fget(data) == 3.5
+    assert type(model).nq.fset is None and "read-only" in type(model).nq.__doc__
+    with pytest.raises(AttributeError):
+        model.nq = 1
+
+
+def test_scalar_fields_follow_the_simulation():
+    model = wrapper.MjModel.from_xml_string(_XML)
+    data = wrapper.MjData(model)
+    assert data.time == 0
+    mujoco.mj_step(model.ptr, data.ptr)
+    assert data.time == model.opt.timestep
+
+
+def test_fields_the_wrappers_define_keep_the_wrappers_meaning():
+    model = wrapper.MjModel.from_xml_string(_XML)
+    data = wrapper.MjData(model)
+    assert data.model is model
+    assert len(data.contact) == 0 and len(data.ptr.contact) == 0
+    assert model.name == "ball"
+
+
+def test_core_mjlib_resets_a_core_visualisation_option():
+    option = core.MjvOption()
+    option.geomgroup[0] = 0
+    core.mjlib.mjv_defaultOption(option.ptr)
+    assert core.mjlib is mujoco and option.geomgroup[0] == 1
+
+
+def test_core_mjlib_through_the_dm_control_redirect():
+    code = """
+        from composer import dm_control_compat
+        dm_control_compat.install()
+        from dm_control import mujoco
+        from dm_control.mujoco.wrapper.core import mjlib
+        option = mujoco.wrapper.core.MjvOption()
+        option.geomgroup[0] = 0
+        mujoco.wrapper.core.mjlib.mjv_defaultOption(option.ptr)
+        physics = mujoco.Physics.from_xml_string("<mujoco><worldbody/></mujoco>")
+        print(option.geomgroup[0], mjlib.mj_step is __import__("mujoco").mj_step)
+        print(type(type(physics.data).qpos).__name__)
+    """
+    result = subprocess.run(
+        [sys.executable, "-c", textwrap.dedent(code)], capture_output=True, text=True, timeout=120
+    )
+    assert result.returncode == 0, result.stderr
+    assert result.stdout.split("\n")[:2] == ["1 True", "property"]
