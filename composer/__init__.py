@@ -14,6 +14,9 @@ This project's own additions, which dm_control does not have:
 - `composer.dm_control_compat`: the import redirect that serves this project as `dm_control`.
 """
 
+# As on dm_control (whose observation updater imports it), `composer.variation` is there
+# after `import composer` alone.
+from composer import variation
 from composer.arena import Arena
 from composer.constants import SENSOR_SITES_GROUP
 from composer.define import cached_property, observable
@@ -47,4 +50,5 @@ __all__ = [
     "Task",
     "cached_property",
     "observable",
+    "variation",
 ]

@@ -10,9 +10,10 @@
 one and, since it imports those packages through the same names, runs on this project.
 `dm_control.rl.control.PhysicsError` becomes this project's `PhysicsError`, so that
 dm_control's code catches the errors our `Physics` raises. `dm_control.viewer` is the
-module `composer.viewer`, whose `launch` takes dm_control's arguments; dm_control's viewer
-submodules (`dm_control.viewer.application`, ...) are not served, and importing one says
-`'dm_control.viewer' is not a package`. Without an installed dm_control, a bare
+package `composer.viewer`, whose `launch` takes dm_control's arguments; of dm_control's
+viewer submodules only `gui`, `renderer` and `viewer` are served (the parts that code
+such as MoMa's rendering observer uses); importing another (`dm_control.viewer.application`,
+...) raises `ModuleNotFoundError`. Without an installed dm_control, a bare
 `dm_control` package is provided so that `from dm_control import composer, mjcf` works.
 
 Run a script written for dm_control without editing it:

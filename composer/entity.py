@@ -70,7 +70,7 @@ class BuiltAttribute:
         raise AttributeError(message)
 
 
-class Entity(abc.ABC):
+class Entity(metaclass=abc.ABCMeta):
     """Something that exists in the world: an MJCF model plus its behaviour and observables.
 
     Subclasses implement `_build(*args, **kwargs)`, which must create the model that

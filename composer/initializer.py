@@ -5,13 +5,19 @@ import abc
 import numpy as np
 
 
-class Initializer(abc.ABC):
+class Initializer(metaclass=abc.ABCMeta):
     """Sets part of the physics state at the start of every episode.
 
-    Subclasses implement `initialize_episode`, which a task calls from its own
-    `initialize_episode(physics, random_state)` hook (inside `physics.reset_context()`).
+    Subclasses implement `__call__(physics, random_state)`, as in dm_control; a task calls
+    the initializer from its own `initialize_episode(physics, random_state)` hook (inside
+    `physics.reset_context()`). `initialize_episode` is the same call under the name of that
+    hook.
     """
 
     @abc.abstractmethod
-    def initialize_episode(self, physics, random_state: np.random.RandomState) -> None:
+    def __call__(self, physics, random_state: np.random.RandomState) -> None:
         """Writes this initializer's part of the episode's initial state into `physics`."""
+
+    def initialize_episode(self, physics, random_state: np.random.RandomState) -> None:
+        """Calls the initializer: `initializer.initialize_episode(p, r)` is `initializer(p, r)`."""
+        self(physics, random_state)

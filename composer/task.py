@@ -30,7 +30,7 @@ def _steps_per_control_step(control_timestep: float, physics_timestep: float) ->
     return steps
 
 
-class Task(abc.ABC):
+class Task(metaclass=abc.ABCMeta):
     """Defines the reward, termination and timing of a Composer environment.
 
     A subclass provides `root_entity` (the entity, usually an arena, at the top of the

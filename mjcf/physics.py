@@ -24,6 +24,8 @@ _MAX_QUOTED_XML = 500
 
 # dm_control's name for the binding class, which code may construct or check against.
 Binding = binding_module.Binding
+# dm_control compatibility, not our API: its private name, which MoMa imports.
+_EmptyBinding = binding_module.EmptyBinding
 
 
 class _BindableSimulation(engine._Simulation):

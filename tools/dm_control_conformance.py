@@ -1,7 +1,7 @@
 """Runs dm_control 1.0.50's own tests, suite, manipulation and locomotion tasks here.
 
-Usage: `python -m tools.dm_control_conformance [--floor 0.99] [--tasks-only | --tests-only]
-[--packages composer mjcf ...]`
+Usage: `python -m tools.dm_control_conformance [--floor 0.99] [--tasks-only | --tests-only |
+--moma-only] [--packages composer mjcf ...]`
 
 Builds a scratch venv under `.cache/dm_control_conformance` with this project and
 `dm-control==1.0.50` installed from PyPI, copies the test files of dm_control's
@@ -17,9 +17,14 @@ own, and runs each for a reset and 100 random steps (actions uniform within the 
 spec's bounds, within [-1, 1] where a bound is MuJoCo's "unbounded" 1e10); it compares a few
 suite trajectories with raw `mj_step` and runs the README's dm_control examples.
 
+Last, it runs DeepMind's MoMa (dm_robotics) tests through the same redirect
+(`tools.moma_conformance`; `--moma-only` runs just those, about a minute once the venv
+exists).
+
 Prints a per-file table with subtotals per package, the failing test ids with the known
-reasons, a per-task table and the totals; exits 1 when the test pass rate is below
-`--floor` or a task fails.
+reasons, a per-task table, the MoMa table and the totals; exits 1 when the test pass rate
+is below `--floor`, a task fails, or a MoMa test that passes on dm_control 1.0.50 + mujoco
+3.17 fails here.
 """
 
 from __future__ import annotations
@@ -35,7 +40,7 @@ import xml.etree.ElementTree as ElementTree
 from pathlib import Path
 from typing import NamedTuple
 
-from tools import ROOT, scratch_venv
+from tools import ROOT, moma_conformance, scratch_venv
 
 CACHE = scratch_venv.CACHE / "dm_control_conformance"
 DM_CONTROL_VERSION = "1.0.50"
@@ -419,19 +424,32 @@ def print_task_table(results: dict) -> int:
     return sum(not r["ok"] for r in results.values())
 
 
+def ensure_conformance_venv() -> Path:
+    """Returns the python of the harness's venv (this project, dm_control 1.0.50, the
+    newest MuJoCo that pip gives it, and MoMa where its wheels exist), made if needed."""
+    CACHE.mkdir(parents=True, exist_ok=True)
+    moma = moma_conformance.supported()
+    return scratch_venv.ensure_venv(
+        CACHE / "venv",
+        [f"dm-control=={DM_CONTROL_VERSION}", *TEST_EXTRAS]
+        + (moma_conformance.MOMA_DEPENDENCIES if moma else []),
+        no_deps=moma_conformance.MOMA_WHEELS if moma else [],
+    )
+
+
 def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--floor", type=float, default=0.0, help="minimum test pass rate")
     parser.add_argument("--tests-only", action="store_true")
     parser.add_argument("--tasks-only", action="store_true")
+    parser.add_argument("--moma-only", action="store_true", help="only MoMa's tests")
     parser.add_argument(
         "--packages", nargs="+", choices=TESTED_PACKAGES, default=list(TESTED_PACKAGES)
     )
     args = parser.parse_args()
-    CACHE.mkdir(parents=True, exist_ok=True)
-    python = scratch_venv.ensure_venv(
-        CACHE / "venv", [f"dm-control=={DM_CONTROL_VERSION}", *TEST_EXTRAS]
-    )
+    python = ensure_conformance_venv()
+    if args.moma_only:
+        return moma_conformance.run(python, CACHE)
     status = 0
     if not args.tasks_only:
         results, failing = run_tests(python, copy_tests(python, tuple(args.packages)))
@@ -445,6 +463,8 @@ def main() -> int:
             outcome["trajectories"]
         ):
             status = 1
+    if not (args.tests_only or args.tasks_only):
+        status |= moma_conformance.run(python, CACHE)
     return status
 
 

@@ -8,7 +8,7 @@ import operator
 import numpy as np
 
 
-class Variation(abc.ABC):
+class Variation(metaclass=abc.ABCMeta):
     """A value that is re-sampled or recomputed each time it is called.
 
     Calling a variation returns a new value. Arithmetic (`+ - * / // **`, unary minus) with

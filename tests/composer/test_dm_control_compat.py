@@ -149,15 +149,18 @@ def test_module_missing_from_this_project_is_a_module_not_found_error():
     assert result.stdout.strip() == "ModuleNotFoundError dm_control.composer.no_such_module"
 
 
-def test_dm_control_viewer_is_this_projects_viewer_and_has_no_submodules():
+def test_dm_control_viewer_is_this_projects_viewer_and_serves_only_momas_submodules():
     result = _run_python(
         textwrap.dedent(
             """
             from composer import dm_control_compat
             dm_control_compat.install()
             from dm_control import viewer
+            from dm_control.viewer import gui, renderer
+            from dm_control.viewer import viewer as viewer_module
             import composer.viewer
             print(viewer is composer.viewer, viewer.launch.__module__)
+            print(gui.__name__, renderer.__name__, viewer_module.__name__)
             try:
                 import dm_control.viewer.application
             except ModuleNotFoundError as e:
@@ -169,11 +172,57 @@ def test_dm_control_viewer_is_this_projects_viewer_and_has_no_submodules():
         )
     )
     assert result.returncode == 0, result.stderr
-    assert result.stdout.split("\n")[:3] == [
+    assert result.stdout.split("\n")[:4] == [
         "True composer.viewer",
-        "No module named 'dm_control.viewer.application'; 'dm_control.viewer' is not a package",
+        "composer.viewer.gui composer.viewer.renderer composer.viewer.viewer",
+        "No module named 'dm_control.viewer.application'",
         "False",
     ]
+
+
+def test_private_names_that_moma_imports_are_served():
+    # MoMa reads dm_control's private class names to annotate and check its arguments.
+    result = _run_python(
+        textwrap.dedent(
+            """
+            from composer import dm_control_compat
+            dm_control_compat.install()
+            from dm_control import mjcf
+            from dm_control.composer.initializers import utils
+            model = mjcf.RootElement()
+            body = model.worldbody.add("body")
+            joint = body.add("joint", name="hinge")
+            body.add("geom", size=[0.1])
+            physics = mjcf.Physics.from_mjcf_model(model)
+            print(isinstance(joint, mjcf.element._ElementImpl))
+            print(isinstance(physics.bind([]), mjcf.physics._EmptyBinding))
+            print(isinstance(physics.bind(joint), mjcf.physics._EmptyBinding))
+            print(utils.JointStaticIsolator.__module__)
+            """
+        )
+    )
+    assert result.returncode == 0, result.stderr
+    assert result.stdout.split("\n")[:4] == [
+        "True",
+        "True",
+        "False",
+        "composer.initializers.utils",
+    ]
+
+
+def test_composer_variation_is_an_attribute_after_importing_composer_alone():
+    result = _run_python(
+        textwrap.dedent(
+            """
+            from composer import dm_control_compat
+            dm_control_compat.install()
+            from dm_control import composer
+            print(composer.variation.distributions.Uniform(0, 1)(random_state=None) < 1)
+            """
+        )
+    )
+    assert result.returncode == 0, result.stderr
+    assert result.stdout.strip() == "True"
 
 
 def test_without_install_dm_control_names_are_not_served():

@@ -1,5 +1,7 @@
 """composer.Entity: the entity tree, poses, velocities and frames."""
 
+import abc
+
 import mujoco
 import numpy as np
 import pytest
@@ -374,3 +376,35 @@ def test_configure_joints_includes_root_joints_of_attached_free_entities():
     physics = _compiled(arena)
     arena.configure_joints(physics, [1, 2, 3, 0, 1, 0, 0])
     np.testing.assert_allclose(box.get_pose(physics)[0], [1, 2, 3])
+
+
+def test_subclass_listing_abc_abc_before_entity_builds_and_stays_abstract():
+    # MoMa declares its robot bases as `class RobotArm(abc.ABC, composer.Entity)`.
+    class AbstractArm(abc.ABC, composer.Entity):
+        @abc.abstractmethod
+        def joint_count(self): ...
+
+    class OneJointArm(AbstractArm):
+        def _build(self):
+            self._model = mjcf.RootElement(model="one_joint_arm")
+            body = self._model.worldbody.add("body")
+            body.add("joint", name="shoulder")
+            body.add("geom", size=[0.05])
+
+        @property
+        def mjcf_model(self):
+            return self._model
+
+        def joint_count(self):
+            return len(self._model.find_all("joint"))
+
+    arm = OneJointArm()
+    assert arm.joint_count() == 1
+    assert arm.mjcf_model.model == "one_joint_arm"
+    with pytest.raises(TypeError, match="joint_count"):
+
+        class NoCount(AbstractArm):
+            _build = OneJointArm._build
+            mjcf_model = OneJointArm.mjcf_model
+
+        NoCount()

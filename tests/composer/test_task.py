@@ -1,5 +1,6 @@
 """composer.Task and composer.NullTask: timing, action spec, observables and defaults."""
 
+import abc
 import collections
 
 import numpy as np
@@ -159,3 +160,14 @@ def test_null_task_gives_zero_reward_and_wraps_its_root_entity():
     task = composer.NullTask(arm)
     assert task.root_entity is arm
     assert task.get_reward(None) == 0.0
+
+
+def test_subclass_listing_abc_abc_before_task_runs_in_an_environment():
+    class RewardOne(abc.ABC, composer.NullTask):
+        def get_reward(self, physics):
+            return 1.0
+
+    task = RewardOne(composer.ModelWrapperEntity(mjcf.RootElement(model="bare")))
+    env = composer.Environment(task)
+    env.reset()
+    assert env.step([]).reward == 1.0

@@ -1,5 +1,6 @@
 """Tests for the Variation base class: lazy arithmetic, indexing and `evaluate`."""
 
+import abc
 import collections
 
 import numpy as np
@@ -123,3 +124,11 @@ def test_str_shows_values_and_repr_shows_the_expression_tree():
     item = deterministic.Constant(7)[2]
     assert str(item) == "7[2]"
     assert repr(item) == "GetItemOperation(Constant(7)[2])"
+
+
+def test_subclass_listing_abc_abc_before_variation_draws_values():
+    class Doubling(abc.ABC, variation.Variation):
+        def __call__(self, initial_value=None, current_value=None, random_state=None):
+            return 2 * initial_value
+
+    assert (Doubling() + 1)(initial_value=3.0) == 7.0

@@ -31,6 +31,10 @@ through X11 (`composer._x11_window`); elsewhere MuJoCo's own are kept, with a wa
 
 Needs a display and GLFW (the `glfw` package comes with `mujoco`); on a headless
 machine run it under Xvfb. Closing the window ends `launch`.
+
+The submodules `gui`, `renderer` and `viewer` are dm_control compatibility, not this
+project's API: the parts of dm_control's viewer package that code written for it (MoMa's
+rendering observer) uses, served under their dm_control names.
 """
 
 from __future__ import annotations
