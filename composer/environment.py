@@ -190,7 +190,6 @@ class Environment(dm_env.Environment):
         self._episode_mjcf_prepared = False
         self._time_limit_checked_for = None
         self._update_model()
-        self._observation_updater.reset(self._physics_proxy, self._random_state)
         self._warn_if_time_limit_is_not_whole_steps()
         self._fixed_random_state = self._random_state.get_state() if fixed_initial_state else None
 
@@ -332,7 +331,8 @@ class Environment(dm_env.Environment):
         Physics, the sub-steps and the task's observables (names and objects, see
         `_collected`) are all the same as last time: as in dm_control, which builds a new
         updater at every recompile, an observable added between episodes is observed from
-        the next reset.
+        the next reset. Either way the updater is then reset, as dm_control resets its new
+        one (the reset draws from the random state, which the seed guarantee counts on).
 
         The data the episode's reset starts from (`mj_resetData` and a forward) is copied
         from the last reset (`ResetState`) while the model is the same in every field
@@ -359,6 +359,9 @@ class Environment(dm_env.Environment):
         ):
             self._rebuild_observation_updater(observables)
         self._collected_observables = collected
+        # dm_control resets the updater it builds at every compile; the reset may draw
+        # from the random state, so it happens here too, for the same draws in order.
+        self._observation_updater.reset(self._physics_proxy, self._random_state)
 
     def _bring_model_up_to_date(self, root) -> _ModelUpdate:
         """Does the model part of `_update_model` and says which outcome it took."""
@@ -430,8 +433,6 @@ class Environment(dm_env.Environment):
         `EpisodeInitializationError`, logging each failed attempt as a warning; the last
         such error propagates.
         """
-        if self._fixed_random_state is not None:
-            self._random_state.set_state(self._fixed_random_state)
         attempt = 1
         while True:
             try:
@@ -456,12 +457,14 @@ class Environment(dm_env.Environment):
         # Hooks replaced on the task or an entity since the last episode take effect now.
         self._hooks.refresh_entity_hooks()
         if self._recompile_mjcf_every_episode or not self._episode_mjcf_prepared:
+            self._restore_fixed_random_state()
             self._hooks.initialize_episode_mjcf(self._random_state)
             self._update_model()
             self._episode_mjcf_prepared = True
         else:
             # The model keeps what the last episode wrote into it.
             self._reset_state.invalidate()
+        self._restore_fixed_random_state()
         with self._physics.reset_context(reset_state=self._reset_state):
             self._hooks.initialize_episode(self._physics_proxy, self._random_state)
         self._observation_updater.reset(self._physics_proxy, self._random_state)
@@ -472,6 +475,12 @@ class Environment(dm_env.Environment):
             discount=None,
             observation=self._observation_updater.get_observation(),
         )
+
+    def _restore_fixed_random_state(self) -> None:
+        # With a fixed initial state, the model's and the physics' initialisation each
+        # start from the state the random state had after construction, as in dm_control.
+        if self._fixed_random_state is not None:
+            self._random_state.set_state(self._fixed_random_state)
 
     # Stepping.
 

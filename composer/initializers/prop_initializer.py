@@ -98,10 +98,6 @@ class PropPlacer(initializer.Initializer):
         self._max_settle_physics_attempts = max_settle_physics_attempts
         self._raise_exception_on_settle_failure = raise_exception_on_settle_failure
 
-    def initialize_episode(self, physics, random_state) -> None:
-        """Places the props (see the class docstring)."""
-        self(physics, random_state)
-
     def __call__(self, physics, random_state, ignore_contacts_with_entities=None) -> None:
         """Places the props, then settles them if requested.
 
@@ -141,6 +137,10 @@ class PropPlacer(initializer.Initializer):
         logging.warning(message)
 
     def _place_all(self, physics, random_state, prop_geoms, ignored_geoms) -> None:
+        # The physics is brought forward exactly where dm_control's placer does it (once
+        # with every placed geom out of collision detection, then after each sampled pose,
+        # and not after the ignored entities collide again), since the step that settles the
+        # props continues from the last forward's results.
         model = physics.model.ptr
         # The sorted distinct geom ids, through a mask: np.unique would import numpy.ma on
         # first use (tens of milliseconds on an episode's first reset).
@@ -153,6 +153,13 @@ class PropPlacer(initializer.Initializer):
         model.geom_contype[disabled] = 0
         model.geom_conaffinity[disabled] = 0
         try:
+            try:
+                physics.forward()
+            except mjcf.PhysicsError as error:
+                raise mjcf.PhysicsError(
+                    "PropPlacer: physics.forward() failed with every prop out of collision "
+                    f"detection: {error}"
+                ) from error
             for prop, geoms in zip(self._props, prop_geoms):
                 restore = np.isin(disabled, geoms)
                 model.geom_contype[disabled[restore]] = saved_contype[restore]
@@ -161,7 +168,6 @@ class PropPlacer(initializer.Initializer):
         finally:
             model.geom_contype[disabled] = saved_contype
             model.geom_conaffinity[disabled] = saved_conaffinity
-        physics.forward()
 
     def _place(self, physics, random_state, prop, geoms) -> None:
         model = physics.model.ptr
@@ -177,13 +183,13 @@ class PropPlacer(initializer.Initializer):
                 self._quaternion, initial_quaternion, quaternion, random_state
             )
             prop.set_pose(physics, position=position, quaternion=quaternion)
-            if self._ignore_collisions:
-                return
             try:
                 physics.forward()
             except mjcf.PhysicsError:
                 # A pose that overflows the contact buffer is a colliding pose.
                 continue
+            if self._ignore_collisions:
+                return
             geom1, geom2 = _kinematic_tree.penetrating_geom_pairs(data)
             if not np.any(is_prop_geom[geom1] | is_prop_geom[geom2]):
                 return
@@ -211,17 +217,21 @@ class PropPlacer(initializer.Initializer):
         settled = False
         while data.time - start_time < self._max_settle_physics_time:
             physics.step()
-            data.qpos[other_qpos] = held_qpos
-            data.qvel[other_dofs] = held_qvel
+            if other_qpos.size:
+                data.qpos[other_qpos] = held_qpos
+                data.qvel[other_dofs] = held_qvel
+                # The held joints moved back, so accelerations are recomputed before they
+                # are read (dm_control's bindings do the same, and the next step goes on
+                # from this forward's results).
+                physics.forward()
             max_qvel = np.max(np.abs(data.qvel[prop_dofs]), initial=0.0)
             max_qacc = np.max(np.abs(data.qacc[prop_dofs]), initial=0.0)
             if (
-                data.time - start_time >= self._min_settle_physics_time
-                and max_qvel < self._max_qvel_tol
+                max_qvel < self._max_qvel_tol
                 and max_qacc < self._max_qacc_tol
+                and data.time - start_time > self._min_settle_physics_time
             ):
                 settled = True
                 break
         data.time = start_time
-        physics.forward()
         return settled

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import functools
+
 import mujoco
 import numpy as np
 
@@ -23,7 +25,8 @@ _REJECTION_SAMPLING_FAILED = (
     "{max_rejection_samples} sampled poses with up to {max_ik_attempts} IK attempts each"
 )
 
-_SCALAR_JOINTS = (int(mujoco.mjtJoint.mjJNT_HINGE), int(mujoco.mjtJoint.mjJNT_SLIDE))
+_HINGE = int(mujoco.mjtJoint.mjJNT_HINGE)
+_SCALAR_JOINTS = (_HINGE, int(mujoco.mjtJoint.mjJNT_SLIDE))
 
 # Geom groups, and which pairs of them make a contact count as a collision: the arm with the
 # arm, the hand or static geometry; the hand with the arm or static geometry (not with
@@ -43,10 +46,11 @@ class ToolCenterPointInitializer(initializer.Initializer):
 
     For each sampled target pose, inverse kinematics is tried up to `max_ik_attempts` times,
     from the current joint configuration first and then from random ones within the joint
-    ranges. A solution is rejected if a joint cannot be brought within its range or, unless
-    `ignore_collisions`, if it creates a relevant collision: between two arm geoms, between
-    the arm and the hand, or between the arm or hand and anything that is not free-floating
-    (so touching a free prop is allowed).
+    ranges (unlimited hinges in [0, 2*pi)), as dm_control's `RobotArm.set_site_to_xpos`
+    does; an arm that has that method does it itself. A solution is rejected if a joint
+    cannot be brought within its range or, unless `ignore_collisions`, if it creates a
+    relevant collision: between two arm geoms, between the arm and the hand, or between the
+    arm or hand and anything that is not free-floating (so touching a free prop is allowed).
     """
 
     def __init__(
@@ -91,6 +95,10 @@ class ToolCenterPointInitializer(initializer.Initializer):
     def __call__(self, physics, random_state) -> None:
         """Sets the arm's joints so that the tool-centre point is at a sampled pose.
 
+        Each sampled pose takes the draws of `position`, then of `quaternion`, then those
+        of the arm's IK attempts (`set_site_to_xpos`), in dm_control's order, so that a
+        seed gives dm_control's episode.
+
         Raises:
           EpisodeInitializationError: If no sampled pose had an acceptable IK solution.
         """
@@ -100,24 +108,23 @@ class ToolCenterPointInitializer(initializer.Initializer):
         joints = _ArmJoints(physics.model.ptr, joint_names)
         geom_groups = self._geom_groups(physics.model.ptr)
         initial_qpos = data.qpos[joints.qpos].copy()
+        # A dm_control arm (`RobotArm`) places the site itself; others get the same method.
+        set_site_to_xpos = getattr(self._arm, "set_site_to_xpos", None)
+        if set_site_to_xpos is None:
+            set_site_to_xpos = functools.partial(_set_site_to_xpos, joints, joint_names)
 
         for _ in range(self._max_rejection_samples):
             target_pos = base.evaluate(self._position, random_state=random_state)
             target_quat = base.evaluate(self._quaternion, random_state=random_state)
-            for attempt in range(self._max_ik_attempts):
-                if attempt > 0:
-                    joints.randomize(data.qpos, random_state)
-                result = inverse_kinematics.qpos_from_site_pose(
-                    physics,
-                    site.full_identifier,
-                    target_pos=target_pos,
-                    target_quat=target_quat,
-                    joint_names=joint_names,
-                    rot_weight=_IK_ROT_WEIGHT,
-                    inplace=True,
-                )
-                if not result.success or not joints.bring_into_range(data.qpos):
-                    continue
+            success = set_site_to_xpos(
+                physics=physics,
+                random_state=random_state,
+                site=site,
+                target_pos=target_pos,
+                target_quat=target_quat,
+                max_ik_attempts=self._max_ik_attempts,
+            )
+            if success:
                 physics.forward()
                 if self._ignore_collisions or not _has_relevant_collision(data, geom_groups):
                     return
@@ -169,30 +176,71 @@ class _ArmJoints:
                 raise ValueError(
                     f"ToolCenterPointInitializer: arm joint {name!r} must be a hinge or slide joint"
                 )
+            if model.jnt_type[joint_id] != _HINGE and not model.jnt_limited[joint_id]:
+                raise ValueError(
+                    f"ToolCenterPointInitializer: arm joint {name!r} is an unlimited slide "
+                    "joint, which has no range to sample positions from; give it a range"
+                )
             ids.append(joint_id)
         self.qpos = model.jnt_qposadr[ids]
-        self.hinge = model.jnt_type[ids] == int(mujoco.mjtJoint.mjJNT_HINGE)
         self.limited = model.jnt_limited[ids].astype(bool)
         self.low, self.high = model.jnt_range[ids].T
 
+    def sampling_bounds(self) -> tuple[np.ndarray, np.ndarray]:
+        """The range each joint is sampled in: its own, or [0, 2*pi) for unlimited hinges."""
+        low = np.where(self.limited, self.low, 0.0)
+        high = np.where(self.limited, self.high, 2.0 * np.pi)
+        return low, high
+
     def randomize(self, qpos: np.ndarray, random_state) -> None:
-        """Sets random positions: uniform in range, or in [-pi, pi) for unlimited hinges."""
-        sampled = random_state.uniform(
-            np.where(self.limited, self.low, -np.pi), np.where(self.limited, self.high, np.pi)
-        )
-        keep = ~self.limited & ~self.hinge  # unlimited slides keep their position
-        qpos[self.qpos] = np.where(keep, qpos[self.qpos], sampled)
+        """Sets each joint to a position drawn uniformly within `sampling_bounds`, in one
+        draw for all joints."""
+        qpos[self.qpos] = random_state.uniform(*self.sampling_bounds())
 
     def bring_into_range(self, qpos: np.ndarray) -> bool:
-        """Shifts hinge angles by multiples of 2*pi into their ranges (unlimited ones into
-        [-pi, pi)); returns False, changing nothing, if some joint cannot be in range."""
-        values = qpos[self.qpos]
+        """Shifts each joint, in order, by whole turns until it is within its sampling
+        bounds; returns False at the first joint that no whole turn brings within them
+        (that joint and those after it are left as they are)."""
         two_pi = 2.0 * np.pi
-        wrapped = np.where(
-            self.limited, self.low + (values - self.low) % two_pi, (values + np.pi) % two_pi - np.pi
-        )
-        values = np.where(self.hinge, wrapped, values)
-        if np.any(self.limited & ((values < self.low) | (values > self.high))):
-            return False
-        qpos[self.qpos] = values
+        for address, low, high in zip(self.qpos, *self.sampling_bounds()):
+            # Whole turns one at a time, as dm_control shifts them, for the same rounding.
+            while qpos[address] >= high:
+                qpos[address] -= two_pi
+            while qpos[address] < low:
+                qpos[address] += two_pi
+                if qpos[address] > high:
+                    return False
         return True
+
+
+def _set_site_to_xpos(
+    joints: _ArmJoints,
+    joint_names: list[str],
+    *,
+    physics,
+    random_state,
+    site,
+    target_pos,
+    target_quat,
+    max_ik_attempts: int,
+) -> bool:
+    """dm_control's `RobotArm.set_site_to_xpos` for arms that lack it: IK from the current
+    joints, then, after each failed attempt while more than one is allowed, from joints
+    drawn within their sampling bounds; returns whether an attempt succeeded."""
+    qpos = physics.data.ptr.qpos
+    success = False
+    for _ in range(max_ik_attempts):
+        result = inverse_kinematics.qpos_from_site_pose(
+            physics,
+            site.full_identifier,
+            target_pos=target_pos,
+            target_quat=target_quat,
+            joint_names=joint_names,
+            rot_weight=_IK_ROT_WEIGHT,
+            inplace=True,
+        )
+        success = result.success and joints.bring_into_range(qpos)
+        if success or max_ik_attempts <= 1:
+            break
+        joints.randomize(qpos, random_state)
+    return success

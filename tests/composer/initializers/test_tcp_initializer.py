@@ -120,14 +120,15 @@ def test_places_the_tool_centre_point_at_the_target_pose():
 
 
 def test_solution_respects_joint_ranges():
+    # Unlimited hinges end in [0, 2*pi), the range dm_control's arms sample them from.
     arm, hand, physics = _scene()
     initializer = ToolCenterPointInitializer(hand, arm, position=[0.4, -0.2, 0.4])
     for seed in range(3):
         initializer.initialize_episode(physics, np.random.RandomState(seed))
         qpos = _qpos(physics, arm)
         for joint, value in zip(arm.joints, qpos):
-            low, high = _LIMITED.get(joint.name, (-np.pi, np.pi))
-            assert low <= value <= high
+            low, high = _LIMITED.get(joint.name, (0.0, 2 * np.pi))
+            assert low <= value < high
 
 
 def test_unreachable_target_raises_and_restores_the_arm():
