@@ -22,6 +22,9 @@ def test_hook_trace_records_reset_hooks_task_first_then_entity():
         "entity.initialize_episode_mjcf",
         "task.after_compile",
         "entity.after_compile",
+        # dm_control samples the observables after every compile, then after the episode's
+        # initialisation (each sample may draw a corruptor's noise).
+        "observables sampled",
         "task.initialize_episode",
         "entity.initialize_episode",
         "observables sampled",
