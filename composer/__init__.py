@@ -14,6 +14,9 @@ This project's own additions, which dm_control does not have:
 - `composer.dm_control_compat`: the import redirect that serves this project as `dm_control`.
 """
 
+# First: it picks MuJoCo's OpenGL backend before mujoco is imported.
+import mujoco_physics  # noqa: F401
+
 # As on dm_control (whose observation updater imports it), `composer.variation` is there
 # after `import composer` alone.
 from composer import variation

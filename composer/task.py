@@ -37,6 +37,7 @@ class Task(metaclass=abc.ABCMeta):
     model tree) and `get_reward(physics)`. Everything else has a default:
 
     - `should_terminate_episode` returns False and `get_discount` returns 1.0;
+    - `get_success` returns None (success is not defined);
     - `before_step` writes the action into the actuators' controls;
     - the other lifecycle hooks (`initialize_episode_mjcf`, `after_compile`,
       `initialize_episode`, `before_substep`, `after_substep`, `after_step`) do nothing;
@@ -170,6 +171,15 @@ class Task(metaclass=abc.ABCMeta):
     def get_discount(self, physics) -> float:
         """The discount for the current step (1.0 by default)."""
         return 1.0
+
+    def get_success(self, physics) -> bool | None:
+        """Whether the task's goal is met in the current state; None (the default) for a
+        task that does not define success.
+
+        Not part of dm_control's Task: `composer.gym.GymnasiumEnv` reports it as
+        `info['is_success']` at the end of each episode.
+        """
+        return None
 
     def initialize_episode_mjcf(self, random_state: np.random.RandomState) -> None:
         """Changes the MJCF model before an episode is compiled (nothing by default)."""

@@ -23,19 +23,29 @@ def get_environments_by_tag(tag: str) -> tuple[str, ...]:
     return registry.names_with_tag(tag)
 
 
-def load(environment_name: str, seed=None) -> composer.Environment:
+def load(
+    environment_name: str, seed=None, *, strip_singleton_obs_buffer_dim: bool = False
+) -> composer.Environment:
     """Returns the environment `environment_name`, seeded with `seed`.
 
     Args:
       environment_name: one of `ALL`, e.g. 'reach_site_features'.
       seed: an int, a `np.random.RandomState`, or None for a random seed; it drives every
         random choice of the episodes (initial arm pose, prop placement, targets).
+      strip_singleton_obs_buffer_dim: as in `composer.Environment`: True drops the leading
+        buffer axis of the observations, (1, 3) -> (3,); False (dm_control's) keeps it.
+        The Gymnasium ids (`composer/<name>-v0`) drop it.
 
     Raises:
       ValueError: if the name is not one of `ALL`; the message suggests close names.
     """
     task = registry.build_task(environment_name)
-    return composer.Environment(task, time_limit=_task_constants.TIME_LIMIT, random_state=seed)
+    return composer.Environment(
+        task,
+        time_limit=_task_constants.TIME_LIMIT,
+        random_state=seed,
+        strip_singleton_obs_buffer_dim=strip_singleton_obs_buffer_dim,
+    )
 
 
 _gymnasium_hook.register_when_gymnasium_is_imported()

@@ -6,6 +6,10 @@ Importing this module imports `gymnasium` and registers one id per name in
 gymnasium is (see `manipulation._gymnasium_hook`), and `gymnasium.make` imports
 manipulation for an id written `manipulation:composer/<name>-v0`.
 
+Each id's `max_episode_steps` is the number of control steps in the task's time limit (10 s
+of 0.04 s steps: 250), after which the environment ends the episode itself (truncated);
+Gymnasium's `TimeLimit`, which `gymnasium.make` adds for it, ends it at that same step.
+
 `gymnasium.make(id, **kwargs)` builds `make_env(name, **kwargs)`;
 `gymnasium.make_vec(id, num_envs=n, vectorization_mode='vector_entry_point', **kwargs)`
 builds `make_vector_env(name, n, **kwargs)`: a `composer.gym.ThreadedVectorEnv`, with
@@ -16,21 +20,41 @@ in `kwargs` with the sub-environments' ones.)
 """
 
 import functools
+import math
 from typing import TYPE_CHECKING
 
 import gymnasium
 from gymnasium.vector import AutoresetMode
 
 import manipulation
+from manipulation.tasks import task_constants
 
 if TYPE_CHECKING:
     from composer.batch.gym import WarpVectorEnv
     from composer.gym import GymnasiumEnv, RayVectorEnv, ThreadedVectorEnv
 
-__all__ = ["NAMESPACE", "env_id", "make_env", "make_vector_env", "register_all"]
+__all__ = [
+    "MAX_EPISODE_STEPS",
+    "NAMESPACE",
+    "env_id",
+    "make_env",
+    "make_vector_env",
+    "register_all",
+]
 
 NAMESPACE = "composer"
 _VERSION = 0
+
+
+def _episode_steps(time_limit: float, control_timestep: float) -> int:
+    """The control steps of an episode: `composer.Environment` ends it at the first step
+    whose time reaches the time limit (rounded to absorb the timesteps' float error)."""
+    return math.ceil(round(time_limit / control_timestep, 6))
+
+
+#: The steps after which every manipulation episode is truncated: all tasks share the
+#: time limit and the control timestep.
+MAX_EPISODE_STEPS = _episode_steps(task_constants.TIME_LIMIT, task_constants.CONTROL_TIMESTEP)
 
 
 def env_id(environment_name: str) -> str:
@@ -39,7 +63,8 @@ def env_id(environment_name: str) -> str:
 
 
 def make_env(environment_name: str, **kwargs) -> "GymnasiumEnv":
-    """Returns `manipulation.load(environment_name)` as a `GymnasiumEnv`.
+    """Returns `manipulation.load(environment_name)` as a `GymnasiumEnv`, its
+    observations without the leading buffer axis (`strip_singleton_obs_buffer_dim`).
 
     Args:
       environment_name: one of `manipulation.ALL`.
@@ -49,7 +74,36 @@ def make_env(environment_name: str, **kwargs) -> "GymnasiumEnv":
     # Imported here: this module may run while composer.gym is being imported.
     from composer.gym import GymnasiumEnv
 
-    return GymnasiumEnv(manipulation.load(environment_name), **kwargs)
+    env = manipulation.load(environment_name, strip_singleton_obs_buffer_dim=True)
+    return GymnasiumEnv(env, **kwargs)
+
+
+def _make_time_limited_env(environment_name: str, max_episode_steps: int, **kwargs):
+    """`make_env(environment_name, **kwargs)` in Gymnasium's `TimeLimit`."""
+    return gymnasium.wrappers.TimeLimit(make_env(environment_name, **kwargs), max_episode_steps)
+
+
+def _shorter_episode_steps(max_episode_steps: int | None) -> int | None:
+    """`max_episode_steps` if it ends episodes before the task's time limit does, None if
+    it leaves them to it (None, -1 or `MAX_EPISODE_STEPS`).
+
+    Raises:
+      ValueError: for a value that is not -1, None or an int in [1, MAX_EPISODE_STEPS].
+    """
+    if max_episode_steps is None or max_episode_steps in (-1, MAX_EPISODE_STEPS):
+        return None
+    if (
+        not isinstance(max_episode_steps, int)
+        or isinstance(max_episode_steps, bool)
+        or not 1 <= max_episode_steps < MAX_EPISODE_STEPS
+    ):
+        raise ValueError(
+            f"max_episode_steps: expected an int from 1 to {MAX_EPISODE_STEPS} (the task's "
+            f"time limit, {task_constants.TIME_LIMIT:g} s of "
+            f"{task_constants.CONTROL_TIMESTEP:g} s steps, ends episodes there), -1 or "
+            f"None, got {max_episode_steps!r}"
+        )
+    return max_episode_steps
 
 
 def make_vector_env(
@@ -67,6 +121,7 @@ def make_vector_env(
     autoreset_mode: AutoresetMode | str = AutoresetMode.NEXT_STEP,
     copy: bool = True,
     device: str | None = None,
+    max_episode_steps: int | None = None,
     **kwargs,
 ) -> "ThreadedVectorEnv | RayVectorEnv | WarpVectorEnv":
     """Returns a vector env of `num_envs` copies of `make_env(environment_name)`.
@@ -80,11 +135,17 @@ def make_vector_env(
         CUDA when Warp sees a GPU, else "cpu"); kwargs go to
         `composer.batch.BatchEnvironment`.
       autoreset_mode, copy: passed to either.
+      max_episode_steps: what `gymnasium.make_vec` passes on (the id's, 250, unless given):
+        fewer steps than the task's time limit end each sub-environment's episodes after
+        that many steps (truncated, as Gymnasium's `TimeLimit` does), except on "warp"
+        (pass `time_limit` there); None, -1 or 250 leave them to the time limit.
       **kwargs: passed to each sub-environment's `GymnasiumEnv`.
 
     Raises:
-      ValueError: for an unknown backend, or an option the backend does not take.
+      ValueError: for an unknown backend, an option the backend does not take, or a
+        `max_episode_steps` above the task's own (episodes cannot be made longer).
     """
+    shorter_episodes = _shorter_episode_steps(max_episode_steps)
     if backend == "warp":
         from manipulation import batch
 
@@ -93,12 +154,23 @@ def make_vector_env(
         ray_only = (num_cpus_per_actor, max_restarts, start_timeout, call_timeout)
         if given or any(value is not None for value in ray_only):
             raise ValueError(f"{(given or ['a Ray option'])[0]}: not an option of backend='warp'")
+        if shorter_episodes is not None:
+            raise ValueError(
+                f"max_episode_steps={max_episode_steps}: not an option of backend='warp'; "
+                "pass time_limit (seconds) instead"
+            )
+        kwargs.setdefault("strip_singleton_obs_buffer_dim", True)
         return batch.make_vector_env(environment_name, num_envs, device, autoreset_mode, **kwargs)
     if device is not None:
         raise ValueError(f"device: an option of backend='warp', but backend is {backend!r}")
     from composer.gym import RayVectorEnv, ThreadedVectorEnv
 
-    env_fn = functools.partial(make_env, environment_name, **kwargs)
+    if shorter_episodes is None:
+        env_fn = functools.partial(make_env, environment_name, **kwargs)
+    else:
+        env_fn = functools.partial(
+            _make_time_limited_env, environment_name, shorter_episodes, **kwargs
+        )
     ray_options = {
         "address": address,
         "envs_per_actor": envs_per_actor,
@@ -139,6 +211,7 @@ def register_all() -> None:
             id=env_id(name),
             entry_point=f"{__name__}:make_env",
             vector_entry_point=f"{__name__}:make_vector_env",
+            max_episode_steps=MAX_EPISODE_STEPS,
             kwargs={"environment_name": name},
         )
 

@@ -5,6 +5,8 @@ load them with `mjcf.from_path` / `from_xml_string` / `from_file`, compose them 
 `attach`, and simulate them with `mjcf.Physics.from_mjcf_model`.
 """
 
+# First: it picks MuJoCo's OpenGL backend before mujoco is imported.
+import mujoco_physics  # noqa: F401
 from mjcf import mujoco_compat
 
 # Before any module that reads the installed MuJoCo's tables: an unsupported release gets

@@ -8,7 +8,13 @@ It knows nothing of MJCF elements; `mjcf.Physics` builds on it. It cannot be nam
 module's own names are available here too (`mujoco_physics.mj_step`).
 """
 
-from mujoco_physics import version
+# Before anything imports mujoco, which reads MUJOCO_GL once: a headless Linux machine
+# renders with EGL (see `_gl_backend`).
+from mujoco_physics import _gl_backend
+
+_gl_backend.default_to_headless()
+
+from mujoco_physics import version  # noqa: E402
 
 # Before any module that reads the installed MuJoCo's tables: an unsupported release gets
 # one clear ImportError.

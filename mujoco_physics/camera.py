@@ -14,6 +14,7 @@ from typing import TYPE_CHECKING, NamedTuple
 import mujoco
 import numpy as np
 
+from mujoco_physics import _gl_backend
 from mujoco_physics.rendering import (
     camera_index,
     check_render_request,
@@ -136,7 +137,7 @@ class Camera:
         self._physics = physics
         self._scene_callback = scene_callback
         geoms = max_geom or 2 * (model.ngeom + model.nsite + model.njnt + model.nbody) + 1000
-        self._renderer = mujoco.Renderer(model, height=height, width=width, max_geom=geoms)
+        self._renderer = _gl_backend.new_renderer(model, height, width, max_geom=geoms)
         self._option = mujoco.MjvOption()
         self._perturb = mujoco.MjvPerturb()
         self._camera = mujoco.MjvCamera()

@@ -7,6 +7,8 @@ from typing import NamedTuple
 import mujoco
 import numpy as np
 
+from mujoco_physics import _gl_backend
+
 _RENDER_FLAG_PREFIX = "mjRND_"
 
 # Messages of the render-request checks, under the names dm_control's tests read them from.
@@ -152,7 +154,7 @@ class Renderers:
             buffer = self._model.vis.global_
             if key[0] > buffer.offheight or key[1] > buffer.offwidth:
                 raise frame_limit_error(key[0], key[1], buffer)
-            renderer = mujoco.Renderer(self._model, height=key[0], width=key[1])
+            renderer = _gl_backend.new_renderer(self._model, height=key[0], width=key[1])
             self._renderers[key] = renderer
         return renderer
 

@@ -61,6 +61,6 @@ def test_gymnasium_example_makes_an_env_and_a_vector_env():
     namespace = {}
     exec(compile(_section_code("Use with Gymnasium"), str(README), "exec"), namespace)
     assert namespace["frame"].shape == (480, 640, 3)
-    assert namespace["observations"]["duplo2x4/position"].shape == (4, 1, 3)
+    assert namespace["observations"]["duplo2x4/position"].shape == (4, 3)
     assert namespace["rewards"].shape == (4,)
     assert namespace["envs"].closed

@@ -14,6 +14,9 @@ Contract of the adapter (`GymnasiumEnv`):
 - `step` returns `(observation, reward, terminated, truncated, info)`: an episode that
   ends with discount 0 (the task ended it) is *terminated*, one that ends with a
   non-zero discount (the time limit) is *truncated*; `info['discount']` is the discount.
+  At an episode's end (terminated or truncated), a wrapped environment whose task defines
+  success (`composer.Task.get_success` returns a bool, not None) adds `info['is_success']`,
+  a bool (Stable-Baselines3's key); no other step carries it.
   The reward is checked against the wrapped environment's `reward_spec()`, which must
   describe one number.
 - `render()` draws the `camera` with `mujoco`'s off-screen renderer: (height, width, 3)
@@ -205,13 +208,15 @@ class GymnasiumEnv(gymnasium.Env):
         Returns:
           observation, reward (a float), terminated (the episode ended with discount 0),
           truncated (it ended with a non-zero discount: the time limit), and an info dict
-          holding 'discount'.
+          holding 'discount' and, when the episode ended and the task defines success,
+          'is_success' (a bool: `task.get_success(physics)`).
 
         Raises:
           RuntimeError: if the episode is over (or never started) and `reset` was not
             called.
           ValueError: naming the reward, if it does not match the wrapped environment's
-            `reward_spec()` (one number, within its bounds if it has any).
+            `reward_spec()` (one number, within its bounds if it has any); naming
+            `get_success`, if the task's returns something other than a bool or None.
         """
         if self._episode_over:
             raise RuntimeError(
@@ -219,18 +224,22 @@ class GymnasiumEnv(gymnasium.Env):
             )
         timestep = self._env.step(action)
         discount = timestep.discount
+        info = {"discount": discount}
         terminated = truncated = False
         if timestep.last():
             self._episode_over = True
             terminated = discount == 0
             truncated = not terminated
+            success = self._success()
+            if success is not None:
+                info["is_success"] = success
         self._show_in_window()
         return (
             self._observation(timestep.observation),
             self._reward(timestep.reward),
             terminated,
             truncated,
-            {"discount": discount},
+            info,
         )
 
     def render(self) -> np.ndarray | None:
@@ -253,6 +262,21 @@ class GymnasiumEnv(gymnasium.Env):
         if self._window is not None:
             self._window.close()
         self._env.close()
+
+    def _success(self) -> bool | None:
+        """The task's `get_success(physics)`, or None for an environment without one."""
+        task = getattr(self._env, "task", None)
+        get_success = getattr(task, "get_success", None)
+        if get_success is None:
+            return None
+        success = get_success(self._env.physics)
+        if success is None:
+            return None
+        if isinstance(success, bool | np.bool_):
+            return bool(success)
+        raise ValueError(
+            f"{type(task).__name__}.get_success: expected True, False or None, got {success!r}"
+        )
 
     def _show_in_window(self) -> None:
         if self._window is not None:

@@ -48,7 +48,7 @@ class ManipulationTask(composer.Task):
     timing (0.002 s physics steps, 20 per control step) and enables the arm's and hand's
     observables; with `obs_settings.camera` it adds the 'front_close' camera images. At the
     start of every episode the pinch site is put at a random point of `tcp_bounds`, pointing
-    down. Subclasses add props and implement `get_reward`.
+    down. Subclasses add props and implement `get_reward`, whose full value (1) is success.
 
     Args:
       obs_settings: which observables to enable.
@@ -130,6 +130,13 @@ class ManipulationTask(composer.Task):
 
     def initialize_episode(self, physics, random_state) -> None:
         self._tcp_initializer(physics, random_state)
+
+    def get_success(self, physics) -> bool:
+        """Whether the goal is met: the reward is at its full value, 1. Reach: the pinch
+        site within `REACH_RADIUS` of the target; lift: the prop's lowest corner at the
+        lift height, in the hand; place, stack and reassemble: every brick within its seat
+        tolerance, and (place, stack) let go of."""
+        return self.get_reward(physics) >= 1.0
 
     def _hand_touches(self) -> bool:
         """Whether any hand geom is in contact with a geom of the watched entities."""

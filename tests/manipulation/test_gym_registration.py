@@ -1,15 +1,23 @@
 """The manipulation tasks are Gymnasium ids, registered without importing gymnasium early."""
 
+import math
 import subprocess
 import sys
 import textwrap
+import warnings
 
 import gymnasium
 import numpy as np
 import pytest
+from gymnasium.utils.env_checker import check_env
 
+import composer
 import manipulation
 from composer.gym import GymnasiumEnv, ThreadedVectorEnv
+from manipulation.tasks import registry
+
+# 10 s episodes of 0.04 s control steps (manipulation's module docstring).
+EPISODE_STEPS = 250
 
 
 def _run(code: str) -> str:
@@ -49,7 +57,7 @@ def test_make_vec_with_the_vector_entry_point_gives_the_threaded_vector_env():
     assert envs.num_envs == 3
     observations, _ = envs.reset(seed=0)
     _, rewards, *_ = envs.step(np.zeros((3, 9)))
-    assert observations["jaco_arm/joints_pos"].shape == (3, 1, 6, 2)
+    assert observations["jaco_arm/joints_pos"].shape == (3, 6, 2)
     assert rewards.shape == (3,)
     envs.close()
 
@@ -170,3 +178,148 @@ def test_make_with_human_render_mode_opens_no_window_before_the_first_reset():
     env = gymnasium.make("composer/reach_site_features-v0", render_mode="human")
     assert env.render_mode == "human"
     env.close()
+
+
+def _steps_until_the_end(env, action) -> tuple[int, bool, bool, dict]:
+    """Steps `env` from a reset until its episode ends: (steps, terminated, truncated, info)."""
+    env.reset(seed=0)
+    steps = 0
+    while True:
+        _, _, terminated, truncated, info = env.step(action)
+        steps += 1
+        if terminated or truncated:
+            return steps, terminated, truncated, info
+
+
+@pytest.mark.parametrize("name", ["reach_site_features", "lift_brick_features"])
+def test_max_episode_steps_is_the_step_at_which_episodes_truncate(name):
+    spec = gymnasium.spec(f"composer/{name}-v0")
+    assert spec.max_episode_steps == EPISODE_STEPS
+    env = gymnasium.make(spec.id)
+    steps, terminated, truncated, _ = _steps_until_the_end(env, np.zeros(9))
+    assert (steps, terminated, truncated) == (EPISODE_STEPS, False, True)
+    # The environment itself ends the episode at the same step: Gymnasium's TimeLimit
+    # neither cuts it short nor adds a second end.
+    steps, terminated, truncated, _ = _steps_until_the_end(env.unwrapped, np.zeros(9))
+    assert (steps, terminated, truncated) == (EPISODE_STEPS, False, True)
+
+
+def test_every_ids_max_episode_steps_is_its_tasks_time_limit_in_control_steps():
+    for name in manipulation.ALL:
+        task = registry.build_task(name)
+        # manipulation.load gives every task 10 s episodes.
+        steps = round(10.0 / task.control_timestep)
+        assert gymnasium.spec(f"composer/{name}-v0").max_episode_steps == steps == EPISODE_STEPS
+
+
+def test_make_vec_takes_a_shorter_max_episode_steps():
+    envs = gymnasium.make_vec(
+        "composer/reach_site_features-v0",
+        num_envs=2,
+        vectorization_mode="vector_entry_point",
+        max_episode_steps=3,
+    )
+    envs.reset(seed=0)
+    truncations = [envs.step(np.zeros((2, 9)))[3].tolist() for _ in range(3)]
+    assert truncations == [[False, False], [False, False], [True, True]]
+    envs.close()
+
+
+def test_make_vec_refuses_a_max_episode_steps_beyond_the_time_limit():
+    with pytest.raises(
+        ValueError, match="max_episode_steps: expected an int from 1 to 250 .* got 300"
+    ):
+        gymnasium.make_vec(
+            "composer/reach_site_features-v0",
+            num_envs=2,
+            vectorization_mode="vector_entry_point",
+            max_episode_steps=300,
+        )
+
+
+def test_registered_ids_observations_have_no_buffer_axis():
+    env = gymnasium.make("composer/reach_site_features-v0")
+    observation, _ = env.reset(seed=0)
+    space = env.observation_space
+    # A 3-D target position; two values (sine and cosine) for each of the six arm joints.
+    assert space["target_position"].shape == observation["target_position"].shape == (3,)
+    assert space["jaco_arm/joints_pos"].shape == (6, 2)
+    assert observation["jaco_arm/joints_pos"].shape == (6, 2)
+    assert space["jaco_arm/jaco_hand/pinch_site_rmat"].shape == (9,)
+    assert observation in space
+    env.close()
+
+
+def test_a_vision_ids_camera_image_has_no_buffer_axis():
+    env = gymnasium.make("composer/reach_site_vision-v0")
+    observation, _ = env.reset(seed=0)
+    assert env.observation_space["front_close"].shape == (84, 84, 3)
+    assert observation["front_close"].shape == (84, 84, 3)
+    env.close()
+
+
+def test_check_env_passes_headless_on_the_unwrapped_registered_env(monkeypatch):
+    # Headless: GLFW, which the 'human' render mode needs, finds no display.
+    monkeypatch.delenv("DISPLAY", raising=False)
+    monkeypatch.delenv("WAYLAND_DISPLAY", raising=False)
+    env = gymnasium.make("composer/reach_site_features-v0")
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        # Advice, not failures: unbounded observations, actions not in [-1, 1].
+        warnings.filterwarnings("ignore", message=".*observation space m.*infinity")
+        warnings.filterwarnings("ignore", message=".*symmetric and normalized space")
+        check_env(env.unwrapped, skip_render_check=True)
+    env.close()
+
+
+def test_rescale_action_maps_minus_one_and_one_to_the_actuators_ranges():
+    env = gymnasium.wrappers.RescaleAction(
+        gymnasium.make("composer/reach_site_features-v0"), -1.0, 1.0
+    )
+    assert env.action_space == gymnasium.spaces.Box(-1.0, 1.0, (9,), np.float64)
+    # Joint velocity limits (rad/s) of the arm's six joints, then the three fingers'.
+    limits = np.array([0.6283] * 3 + [0.8378] * 3 + [5.0] * 3)
+    env.reset(seed=0)
+    controls = env.unwrapped.dm_env.physics.data.ctrl
+    for sign in (-1.0, 1.0):
+        env.step(np.full(9, sign))
+        np.testing.assert_allclose(controls, sign * limits, rtol=1e-12)
+    env.close()
+
+
+def _pinch_to_target(env) -> float:
+    """The distance from the pinch site to the reach target, from the physics."""
+    task, physics = env.dm_env.task, env.dm_env.physics
+    pinch = physics.bind(task.hand.tool_center_point).xpos
+    return math.dist(pinch, physics.bind(task.target).xpos)
+
+
+def test_reach_episode_with_the_hand_at_the_target_ends_with_is_success():
+    env = gymnasium.make("composer/reach_site_features-v0")
+    env.reset(seed=0)
+    gym_env = env.unwrapped
+    task, physics = gym_env.dm_env.task, gym_env.dm_env.physics
+    target = physics.bind(task.target)
+    infos = []
+    truncated = False
+    while not truncated:
+        # The target follows the hand: the hand is at the target after every step.
+        target.pos = physics.bind(task.hand.tool_center_point).xpos
+        physics.forward()
+        _, _, terminated, truncated, info = env.step(np.zeros(9))
+        infos.append(info)
+    assert _pinch_to_target(gym_env) < 0.05  # within the 5 cm reach radius
+    assert infos[-1]["is_success"] is True
+    assert all("is_success" not in info for info in infos[:-1])
+    env.close()
+
+
+def test_short_random_reach_episode_ends_without_success():
+    task = registry.build_task("reach_site_features")
+    env = GymnasiumEnv(composer.Environment(task, time_limit=0.4, random_state=3))
+    env.action_space.seed(3)
+    env.reset(seed=3)
+    infos = [env.step(env.action_space.sample())[-1] for _ in range(10)]
+    assert _pinch_to_target(env) > 0.05  # outside the 5 cm reach radius
+    assert infos[-1]["is_success"] is False  # 0.4 s: the tenth step is the last
+    assert all("is_success" not in info for info in infos[:-1])

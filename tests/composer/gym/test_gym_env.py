@@ -310,3 +310,58 @@ def test_flattening_a_task_without_observations_gives_empty_dict_observations():
     assert observation == {}
     assert env.observation_space == gymnasium.spaces.Dict({})
     assert env.step(np.zeros(env.action_space.shape))[0] == {}
+
+
+class _SliderToTheRight(SliderTask):
+    """Success: the block right of the origin."""
+
+    def get_success(self, physics):
+        return physics.data.qpos[0] > 0.0
+
+
+def test_is_success_comes_with_the_last_step_of_a_terminated_episode_only():
+    env = GymnasiumEnv(composer.Environment(_SliderToTheRight(end_after_steps=3)))
+    env.reset(seed=0)
+    env.dm_env.physics.data.qpos[0] = 0.5
+    infos = [env.step(np.zeros(1))[-1] for _ in range(3)]
+    assert [("is_success" in info) for info in infos] == [False, False, True]
+    assert infos[-1]["is_success"] is True
+
+
+def test_is_success_comes_with_the_last_step_of_a_truncated_episode():
+    env = GymnasiumEnv(composer.Environment(_SliderToTheRight(), time_limit=0.04))
+    env.reset(seed=0)
+    env.dm_env.physics.data.qpos[0] = -0.5
+    first = env.step(np.zeros(1))
+    last = env.step(np.zeros(1))
+    assert "is_success" not in first[-1]
+    assert last[3] and last[-1]["is_success"] is False
+
+
+def test_a_task_that_does_not_define_success_gives_no_is_success():
+    env = GymnasiumEnv(slider_environment(time_limit=0.04))
+    env.reset(seed=0)
+    infos = [env.step(np.zeros(1))[-1] for _ in range(2)]
+    assert infos == [{"discount": 1.0}, {"discount": 1.0}]
+
+
+def test_a_success_that_is_not_a_bool_is_refused_naming_get_success():
+    class Scored(SliderTask):
+        def get_success(self, physics):
+            return 0.7
+
+    env = GymnasiumEnv(composer.Environment(Scored(end_after_steps=1)))
+    env.reset(seed=0)
+    with pytest.raises(
+        ValueError, match=r"Scored.get_success: expected True, False or None, got 0.7"
+    ):
+        env.step(np.zeros(1))
+
+
+@pytest.mark.parametrize("strip, shape", [(False, (1, 1)), (True, (1,))])
+def test_a_wrapped_environment_keeps_its_own_observation_buffer_axis(strip, shape):
+    dm = composer.Environment(SliderTask(), strip_singleton_obs_buffer_dim=strip)
+    env = GymnasiumEnv(dm)
+    observation, _ = env.reset(seed=0)
+    assert env.observation_space["position"].shape == shape
+    assert observation["position"].shape == shape
