@@ -316,6 +316,39 @@ class BatchEnvironment:
         the last step (rows of other worlds are that step's observation), as `array_type`."""
         return {key: self.hand_out(value) for key, value in self._final_observation.items()}
 
+    @property
+    def array_type(self) -> str:
+        """What `reset` and `step` hand out: "numpy", "warp", "torch" or "jax"."""
+        return self._arrays.array_type
+
+    @property
+    def max_episode_steps(self) -> int | None:
+        """The control steps after which the time limit ends an episode; None without one."""
+        return None if self._step_limit == _NO_LIMIT else self._step_limit
+
+    @property
+    def episode_steps(self) -> Any:
+        """The control steps each world's episode has taken, int32 (num_envs,), handed out
+        as `array_type` (a copy).
+
+        Setting it (an integer array of shape (num_envs,), values >= 0) moves each world's
+        count, and so when its time limit ends it: rsl_rl starts training from random
+        episode lengths this way.
+        """
+        return self.hand_out(self.xp.asarray(self._steps, copy=True))
+
+    @episode_steps.setter
+    def episode_steps(self, steps) -> None:
+        values = np.asarray(_to_host(steps))
+        if values.shape != (self.num_envs,) or not np.issubdtype(values.dtype, np.integer):
+            raise ValueError(
+                f"episode_steps: expected integers of shape ({self.num_envs},), got "
+                f"{values.dtype} of shape {values.shape}"
+            )
+        if values.size and values.min() < 0:
+            raise ValueError(f"episode_steps: expected counts >= 0, got {values.min()}")
+        self._steps = self._arrays.asarray(values.astype(np.int32))
+
     def initial_state_stats(self) -> InitialStateStats | None:
         """How the initial-state producers kept up (None for array-code initial states)."""
         return None if self._slots is None else self._slots.stats
@@ -464,6 +497,13 @@ class BatchEnvironment:
         """Stops the initial-state producers."""
         if self._slots is not None:
             self._slots.close()
+
+
+def _to_host(values):
+    """A torch, JAX or Warp array (or anything NumPy reads) as host values."""
+    if hasattr(values, "numpy") and hasattr(values, "cpu"):  # torch
+        return values.detach().cpu().numpy()
+    return values.numpy() if hasattr(values, "numpy") else values
 
 
 def _rows(xp, mask, like):

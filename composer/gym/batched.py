@@ -347,6 +347,28 @@ class BatchedVectorEnv(VectorEnv):
         self._check_open()
         self._map(_set_sub_env_attr, {i: (name, value) for i, value in enumerate(values)})
 
+    def apply(
+        self, function: Callable[..., Any], *args: Any, indices: Sequence[int] | None = None
+    ) -> tuple[Any, ...]:
+        """Returns `function(sub_env, *args)` for each sub-environment in `indices`.
+
+        Each call runs where its sub-environment lives (its thread, or its Ray actor: there
+        `function` and `args` must pickle, and `function` is best a module-level function of
+        a module the actor can import cheaply).
+
+        Args:
+          function: called with a sub-environment (the `gymnasium.Env` built for it) and `args`.
+          indices: which sub-environments, in the order of the results; None for all.
+
+        Raises:
+          ValueError: for an index outside [0, num_envs) or given twice.
+          SubEnvironmentError: if a call raised.
+        """
+        self._check_open()
+        order = list(range(self.num_envs)) if indices is None else self._indices(indices)
+        results = self._map(function, dict.fromkeys(order, args))
+        return tuple(results[i] for i in order)
+
     def close_extras(self, **kwargs: Any) -> None:
         """Closes every sub-environment."""
         self._map(_close_sub_env, self._all(()))
@@ -361,6 +383,20 @@ class BatchedVectorEnv(VectorEnv):
 
     def _in_order(self, results: dict[int, Any]) -> tuple[Any, ...]:
         return tuple(results[i] for i in range(self.num_envs))
+
+    def _indices(self, indices: Sequence[int]) -> list[int]:
+        order = list(indices)
+        integers = all(isinstance(i, int | np.integer) and not isinstance(i, bool) for i in order)
+        if (
+            not integers
+            or len(set(order)) != len(order)
+            or not all(0 <= i < self.num_envs for i in order)
+        ):
+            raise ValueError(
+                f"indices: expected distinct sub-environment indices in [0, {self.num_envs}), "
+                f"got {list(indices)!r}"
+            )
+        return [int(i) for i in order]
 
     def _seeds(self, seed) -> list[int | None]:
         if seed is None:

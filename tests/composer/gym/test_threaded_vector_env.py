@@ -325,6 +325,29 @@ def test_call_get_attr_set_attr_and_render_reach_every_sub_env():
     envs.close()
 
 
+def _reset_with_seed(env, seed):
+    """CounterEnv's first observation after a reset with `seed` (100 * seed), and its length."""
+    return env.reset(seed=seed)[0][0], env.get_wrapper_attr("_length")
+
+
+def test_apply_runs_on_the_chosen_sub_envs_only_in_the_order_given():
+    envs = ThreadedVectorEnv(_counters([5, 6, 7]), num_threads=2)
+    envs.reset(seed=0)
+    assert envs.apply(_reset_with_seed, 4, indices=[2, 0]) == ((400.0, 7), (400.0, 5))
+    observations, *_ = envs.step(np.zeros((3, 1)))
+    assert _obs(observations) == [401.0, 101.0, 401.0]
+    assert envs.apply(_reset_with_seed, 9) == ((900.0, 5), (900.0, 6), (900.0, 7))
+    envs.close()
+
+
+@pytest.mark.parametrize("indices", [[3], [-1], [0, 0], [True], ["1"]])
+def test_apply_rejects_bad_indices_naming_them(indices):
+    envs = ThreadedVectorEnv(_counters([5, 5, 5]), num_threads=1)
+    with pytest.raises(ValueError, match=r"indices: expected distinct sub-environment indices"):
+        envs.apply(_reset_with_seed, 0, indices=indices)
+    envs.close()
+
+
 def test_invalid_thread_count_is_rejected_naming_the_argument():
     with pytest.raises(ValueError, match="num_threads: expected an integer >= 1 or None, got 0"):
         ThreadedVectorEnv(_counters([2]), num_threads=0)
