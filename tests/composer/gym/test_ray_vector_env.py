@@ -131,7 +131,7 @@ def test_a_registered_id_is_made_with_gymnasium_make_in_the_actors(ray, closing)
     assert len(envs.actors) == 1
     assert envs.single_action_space.shape == (9,)
     observations, _ = envs.reset(seed=0)
-    assert observations["jaco_arm/joints_pos"].shape == (2, 1, 6, 2)
+    assert observations["jaco_arm/joints_pos"].shape == (2, 6, 2)
 
 
 def test_a_killed_actor_is_restarted_and_only_its_sub_envs_report_truncation(ray, closing):
