@@ -174,7 +174,9 @@ def test_unnamed_asset_nothing_uses_is_written_without_a_name():
     root = mjcf.RootElement()
     root.asset.add("texture", type="skybox", builtin="gradient", width=8, height=8)
     xml = root.to_xml_string()
-    assert _written_tag(xml, "texture").startswith('<texture class="/" type="skybox"')
+    # Whether a texture takes a default class depends on the MuJoCo release; a name it never has.
+    tag = _written_tag(xml, "texture")
+    assert 'type="skybox"' in tag and "name=" not in tag
     assert mjcf.Physics.from_mjcf_model(root).model.ntex == 1
 
 
