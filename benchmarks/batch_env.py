@@ -242,9 +242,9 @@ def _producer_rate(task: str, workers: int, processes: bool, states: int) -> flo
                 for world in range(states)
             ]
 
-        producer.submit(jobs(0)).result()  # starts the workers, builds their tasks
+        producer.submit(jobs(0)).result(timeout=600)  # starts the workers, builds their tasks
         begin = time.perf_counter()
-        producer.submit(jobs(states)).result()
+        producer.submit(jobs(states)).result(timeout=600)
         return states / (time.perf_counter() - begin)
     finally:
         producer.close()

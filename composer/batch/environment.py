@@ -291,6 +291,12 @@ class BatchEnvironment:
         self._started = False
 
     @property
+    def cameras(self):
+        """The `composer.batch.cameras.BatchCameras` that renders the camera observables
+        for every world, or None when no enabled observable is a camera."""
+        return self._observables.cameras
+
+    @property
     def physics(self) -> BatchPhysics:
         """The `BatchPhysics` of all worlds."""
         return self._physics
@@ -366,9 +372,10 @@ class BatchEnvironment:
         return self._action_spec
 
     def observation_spec(self) -> dict[str, specs.Array]:
-        """One world's observation specs by key (float32, the shapes of one world)."""
+        """One world's observation specs by key: the shapes of one world; features are
+        float32, camera images have their CPU observable's dtype (uint8 RGB)."""
         return {
-            name: specs.Array(tuple(value.shape[1:]), np.float32, name)
+            name: specs.Array(tuple(value.shape[1:]), self._observables.dtype(name), name)
             for name, value in self._observables.read().items()
         }
 

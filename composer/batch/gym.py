@@ -10,9 +10,9 @@ once, with the batch's autoreset mode as Gymnasium names it:
 
 An episode that ends with discount 0 (the task ended it) is terminated, one that ends with a
 non-zero discount (the time limit) truncated, as in `composer.gym.GymnasiumEnv`.
-Observations are the batch's arrays: a dict of (num_envs, ...) float32 arrays, of the
-batch's `array_type` (NumPy, or Warp, torch or JAX arrays on its device), as are rewards,
-terminations and truncations.
+Observations are the batch's arrays: a dict of (num_envs, ...) float32 arrays (uint8 camera
+images), of the batch's `array_type` (NumPy, or Warp, torch or JAX arrays on its device), as
+are rewards, terminations and truncations.
 """
 
 from typing import Any

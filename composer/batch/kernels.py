@@ -19,8 +19,8 @@ def kernels() -> SimpleNamespace:
 
     Returns:
       A namespace with `save_columns`, `restore_columns`, `copy_worlds`, `count_nonfinite`,
-      `contact_worlds`, `take_slots`, `count_episodes` and `static_geom_poses`
-      (documented on each).
+      `contact_worlds`, `take_slots`, `count_episodes`, `static_geom_poses`, and the
+      camera images' `unpack_rgb`, `planar_depth` and `segmentation` (documented on each).
     """
     global _kernels
     if _kernels is None:
@@ -184,6 +184,54 @@ def _define(wp) -> SimpleNamespace:
         rotation = mul_quat(xq, geom_quat[world % geom_quat.shape[0], geom])
         geom_xmat[world, geom] = quat_to_mat(rotation)
 
+    @wp.kernel(module="unique")
+    def unpack_rgb(
+        packed: wp.array2d(dtype=wp.uint32),
+        address: wp.array(dtype=int),
+        camera: int,
+        image: wp.array4d(dtype=wp.uint8),
+    ):
+        """image[world, y, x] = the RGB bytes of MuJoCo Warp's packed pixel (0xAARRGGBB)."""
+        world, pixel = wp.tid()
+        width = image.shape[2]
+        value = packed[world, address[camera] + pixel]
+        y, x = pixel // width, pixel % width
+        image[world, y, x, 0] = wp.uint8((value >> wp.uint32(16)) & wp.uint32(255))
+        image[world, y, x, 1] = wp.uint8((value >> wp.uint32(8)) & wp.uint32(255))
+        image[world, y, x, 2] = wp.uint8(value & wp.uint32(255))
+
+    @wp.kernel(module="unique")
+    def planar_depth(
+        depth: wp.array2d(dtype=wp.float32),
+        address: wp.array(dtype=int),
+        camera: int,
+        far: float,
+        image: wp.array4d(dtype=wp.float32),
+    ):
+        """image[world, y, x, 0] = the pixel's depth along the camera axis, `far` where the
+        ray hit nothing (MuJoCo Warp writes 0 there)."""
+        world, pixel = wp.tid()
+        width = image.shape[2]
+        value = depth[world, address[camera] + pixel]
+        if value <= 0.0:
+            value = far
+        image[world, pixel // width, pixel % width, 0] = value
+
+    @wp.kernel(module="unique")
+    def segmentation(
+        ids: wp.array2d(dtype=wp.vec2i),
+        address: wp.array(dtype=int),
+        camera: int,
+        image: wp.array4d(dtype=wp.int32),
+    ):
+        """image[world, y, x] = (object id, object type) of the pixel, (-1, -1) if none."""
+        world, pixel = wp.tid()
+        width = image.shape[2]
+        value = ids[world, address[camera] + pixel]
+        y, x = pixel // width, pixel % width
+        image[world, y, x, 0] = value[0]
+        image[world, y, x, 1] = value[1]
+
     return SimpleNamespace(
         save_columns=save_columns,
         restore_columns=restore_columns,
@@ -193,4 +241,7 @@ def _define(wp) -> SimpleNamespace:
         take_slots=take_slots,
         count_episodes=count_episodes,
         static_geom_poses=static_geom_poses,
+        unpack_rgb=unpack_rgb,
+        planar_depth=planar_depth,
+        segmentation=segmentation,
     )

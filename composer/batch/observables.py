@@ -4,7 +4,8 @@
 every world, an array with a leading `num_envs` axis. It dispatches on the observable's type
 (`functools.singledispatch`): MJCF features (`MJCFFeature`) and entity root-body features
 (the pose and velocity of `FreePropObservableMixin`) are handled here; a package registers
-readers for its own observable types with `batch_reader.register`.
+readers for its own observable types with `batch_reader.register`. Camera observables
+(`MJCFCamera`) are rendered together, once per observation (`composer.batch.cameras`).
 
 Only options that act on one sample are supported (a batch keeps no per-world buffers):
 `update_interval` 1, `buffer_size` 1, `delay` 0, no corruptor; a named aggregator is the
@@ -19,7 +20,7 @@ import numpy as np
 
 from composer.entity import _RootBodyFeature
 from composer.observation.observable import base
-from composer.observation.observable.mjcf import MJCFFeature
+from composer.observation.observable.mjcf import MJCFCamera, MJCFFeature
 
 __all__ = ["BatchObservables", "FieldSelection", "batch_reader"]
 
@@ -149,28 +150,57 @@ class BatchObservables:
         readers: Mapping[str, Reader] | None = None,
     ):
         readers = dict(readers or {})
+        enabled = {name: o for name, o in observables.items() if o.enabled}
+        cameras = {
+            name: o
+            for name, o in enabled.items()
+            if isinstance(o, MJCFCamera) and name not in readers
+        }
+        self._cameras = None
+        if cameras:
+            from composer.batch.cameras import BatchCameras
+
+            self._cameras = BatchCameras(cameras, physics)
+            readers.update(self._cameras.readers())
         self._readers: dict[str, Reader] = {}
-        for name, observable in observables.items():
-            if not observable.enabled:
-                continue
+        for name, observable in enabled.items():
             _check_options(name, observable)
             reader = readers.get(name)
             if reader is None:
                 reader = batch_reader(observable, physics)
             self._readers[name] = reader
+        self._image_names = frozenset(cameras)
         self._add_buffer_axis = not strip_singleton_obs_buffer_dim
         self._xp = physics.xp
 
+    @property
+    def cameras(self):
+        """The `composer.batch.cameras.BatchCameras` rendering the camera observables, or
+        None when no enabled observable is a camera."""
+        return self._cameras
+
+    def dtype(self, name: str) -> np.dtype:
+        """The NumPy dtype of observation `name`: float32, or a camera image's own."""
+        if name in self._image_names:
+            return self._cameras.dtype(name)
+        return np.dtype(np.float32)
+
     def read(self) -> dict[str, Any]:
-        """Returns the current observation of every world, by key, as new float32 arrays.
+        """Returns the current observation of every world, by key, as new arrays.
+
+        Features are float32; camera images have their CPU observable's dtype (`dtype`).
 
         Returns:
           A dict of arrays of the batch's namespace, of shape (num_envs, 1, *value shape),
           or (num_envs, *value shape) with `strip_singleton_obs_buffer_dim`.
         """
         xp = self._xp
+        if self._cameras is not None:
+            self._cameras.render()
         observation = {}
         for name, read in self._readers.items():
-            value = xp.astype(read(), xp.float32, copy=True)
+            value = read()
+            dtype = value.dtype if name in self._image_names else xp.float32
+            value = xp.astype(value, dtype, copy=True)
             observation[name] = value[:, None, ...] if self._add_buffer_axis else value
         return observation

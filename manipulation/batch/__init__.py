@@ -1,6 +1,8 @@
 """The manipulation tasks batched on MuJoCo Warp: `load(name, num_envs)`.
 
-Every '<task>_features' environment of the suite has a batched version (`BATCHED`). Each task
+Every environment of the suite has a batched version (`BATCHED`): the '<task>_features' ones
+(`BATCHED_FEATURES`) and the '<task>_vision' ones (`BATCHED_VISION`), whose 'front_close'
+camera MuJoCo Warp renders for every world (`composer.batch.cameras`). Each task
 family registers its `composer.batch.BatchTask` in a module of its own (`reach`, `lift`,
 `place`, `stack`, `reassemble`); `arm_observables` registers the batched readers of the arm's
 observables, `seating` and `tower` hold what the place, stack and reassemble tasks share.
@@ -24,6 +26,8 @@ from manipulation.tasks import task_constants as tc
 
 __all__ = [
     "BATCHED",
+    "BATCHED_FEATURES",
+    "BATCHED_VISION",
     "BatchLift",
     "BatchPlace",
     "BatchReach",
@@ -33,38 +37,21 @@ __all__ = [
     "make_vector_env",
 ]
 
-#: The environment names with a batched version: every features variant of the suite.
-BATCHED = (
-    "lift_brick_features",
-    "lift_large_box_features",
-    "place_brick_features",
-    "place_cradle_features",
-    "reach_site_features",
-    "reach_duplo_features",
-    "reassemble_3_bricks_fixed_order_features",
-    "reassemble_5_bricks_random_order_features",
-    "stack_2_bricks_features",
-    "stack_2_bricks_moveable_base_features",
-    "stack_3_bricks_features",
-    "stack_3_bricks_random_order_features",
-    "stack_2_of_3_bricks_random_order_features",
-)
+#: The environment names whose observations are ground-truth features.
+BATCHED_FEATURES = registry.names_with_tag("features")
+#: The environment names whose observations include the 'front_close' camera's images.
+BATCHED_VISION = registry.names_with_tag("vision")
+#: The environment names with a batched version: every environment of the suite.
+BATCHED = BATCHED_FEATURES + BATCHED_VISION
 
 
 def _check_batched(environment_name: str) -> None:
-    """Raises ValueError, saying why, for a name without a batched version."""
-    if environment_name in BATCHED:
-        return
-    if environment_name in registry.names_with_tag("vision"):
+    """Raises ValueError, listing the batched names, for a name without a batched version."""
+    if environment_name not in BATCHED:
         raise ValueError(
-            f"environment_name: {environment_name!r} observes camera images, which a batch "
-            "does not render; its features variant "
-            f"{environment_name.removesuffix('_vision') + '_features'!r} is batched"
+            f"environment_name: expected one of {list(BATCHED)} (the batched tasks), got "
+            f"{environment_name!r}"
         )
-    raise ValueError(
-        f"environment_name: expected one of {list(BATCHED)} (the batched tasks), got "
-        f"{environment_name!r}"
-    )
 
 
 def load(environment_name: str, num_envs: int, *, seed=None, **kwargs) -> batch.BatchEnvironment:
@@ -83,8 +70,7 @@ def load(environment_name: str, num_envs: int, *, seed=None, **kwargs) -> batch.
       `manipulation.load(environment_name)` seeded alike.
 
     Raises:
-      ValueError: if the name is not one of `BATCHED` (for a vision variant, the message
-        says why).
+      ValueError: if the name is not one of `BATCHED`.
     """
     _check_batched(environment_name)
     task = registry.build_task(environment_name)

@@ -1,5 +1,5 @@
-"""`manipulation.batch` batches every features task of the suite, and refuses the others
-saying why; neither needs MuJoCo Warp."""
+"""`manipulation.batch` batches every task of the suite, features and vision, and refuses
+other names listing the batched ones; neither needs MuJoCo Warp."""
 
 import pytest
 
@@ -7,17 +7,11 @@ from manipulation import batch
 from manipulation.tasks import registry
 
 
-def test_batched_names_are_the_features_names_of_the_registry():
+def test_batched_names_are_every_name_of_the_registry():
     assert len(set(batch.BATCHED)) == len(batch.BATCHED)
-    assert sorted(batch.BATCHED) == sorted(registry.names_with_tag("features"))
-
-
-def test_load_refuses_a_vision_task_because_a_batch_renders_no_camera():
-    with pytest.raises(
-        ValueError,
-        match="'lift_brick_vision' observes camera images.*'lift_brick_features' is batched",
-    ):
-        batch.load("lift_brick_vision", 2)
+    assert sorted(batch.BATCHED) == sorted(registry.names())
+    assert len(batch.BATCHED_VISION) == 12
+    assert all(name.endswith("_vision") for name in batch.BATCHED_VISION)
 
 
 def test_load_refuses_an_unknown_name_listing_the_batched_ones():
