@@ -1,4 +1,5 @@
-"""The manipulation suite: a Jaco-style arm and hand, props and 25 tasks on a table.
+"""The manipulation suite: a Jaco-style arm and hand, props and 26 tasks on a table (the 25
+of dm_control's suite and `lift_brick_randomised_features`, whose brick varies per episode).
 
 `load(name, seed)` builds the environment called `name` (one of `ALL`) as a
 `composer.Environment`: control steps of 0.04 s (20 physics steps of 0.002 s), 10 s

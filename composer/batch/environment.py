@@ -11,10 +11,10 @@ from dm_env import specs
 
 import composer
 import mjcf
-from composer.batch import _warp, actions, arrays, refusals
+from composer.batch import _warp, actions, arrays, refusals, variations
 from composer.batch.initial_states import StateMaker, StateProducer
 from composer.batch.observables import BatchObservables
-from composer.batch.physics import BatchPhysics
+from composer.batch.physics import BatchPhysics, device_model_fields
 from composer.batch.state_slots import InitialStateStats, StateSlots
 from composer.batch.task import BatchTask, for_task, has_array_initializer
 from composer.hooks import EnvironmentHooks
@@ -147,7 +147,8 @@ class BatchEnvironment:
       n_sub_steps: physics steps per control step (default: the task's).
       strip_singleton_obs_buffer_dim: as in `composer.Environment`.
       batched_model_fields: MjModel fields to give one row per world, in addition to the
-        task's own (see `BatchPhysics`).
+        task's own and those its episodes vary (`composer.batch.variations`; see
+        `BatchPhysics`).
       nconmax, njmax: per-world contact and constraint capacity for MuJoCo Warp.
       array_type: what `reset` and `step` hand out: "numpy", "warp", "torch" or "jax" (see
         `composer.batch.arrays`). Actions may be NumPy, Warp, torch or JAX arrays whatever
@@ -167,9 +168,10 @@ class BatchEnvironment:
       ValueError: for a bad argument, named in the message.
       TypeError: for a task with no batched version, or an observable without a batched
         reader.
-      NotImplementedError: for a task or entity with `initialize_episode_mjcf` hooks (MJCF
-        variations need a recompile per episode), with sub-step or `after_step` hooks, or
-        with a `before_step` that the `BatchTask` does not override.
+      NotImplementedError: for an MJCF variation that needs a recompile or a per-world field
+        MuJoCo Warp shares (see `composer.batch.variations`), for a task or entity with
+        sub-step or `after_step` hooks, or with a `before_step` that the `BatchTask` does
+        not override.
     """
 
     def __init__(
@@ -217,7 +219,9 @@ class BatchEnvironment:
         self._batch_task = for_task(task)
         cpu_task = self._batch_task.task
         hooks = EnvironmentHooks(cpu_task)
-        refusals.refuse_mjcf_variations(cpu_task)
+        array_initializer = has_array_initializer(self._batch_task)
+        if array_initializer:
+            refusals.refuse_mjcf_variations(self._batch_task)
         refusals.refuse_unbatched_hooks(hooks, self._batch_task)
         self._n_sub_steps = (
             cpu_task.physics_steps_per_control_step
@@ -225,13 +229,21 @@ class BatchEnvironment:
             else argument_checks.integer(n_sub_steps=n_sub_steps)
         )
         self._random_states = _random_states(self.num_envs, random_state, random_states)
-        host = mjcf.Physics.from_mjcf_model(cpu_task.root_entity.mjcf_model)
+        root = cpu_task.root_entity.mjcf_model
+        host = mjcf.Physics.from_mjcf_model(root)
         with host.reset_context():
             hooks.after_compile(host, np.random.RandomState(0))
+        episode_model = variations.EpisodeModel(hooks, host, root)
+        varied = {} if array_initializer else variations.measure(hooks, host, episode_model)
         wp = _warp.load()[0]
         device = _warp.default_device() if device is None else device
         self._arrays = arrays.ArrayBridge(wp, wp.get_device(device), array_type, namespace)
-        fields = tuple(self._batch_task.batched_model_fields) + tuple(batched_model_fields)
+        per_world = variations.per_world_fields(varied, device_model_fields(), host.model.ptr)
+        fields = tuple(
+            dict.fromkeys(
+                (*self._batch_task.batched_model_fields, *batched_model_fields, *per_world.device)
+            )
+        )
         self._physics = BatchPhysics(
             host,
             self.num_envs,
@@ -258,8 +270,14 @@ class BatchEnvironment:
             float(time_limit), cpu_task.physics_timestep, self._n_sub_steps
         )
         self._slots = None
-        if not has_array_initializer(self._batch_task):
-            maker = StateMaker(self._batch_task, host, fields)
+        if not array_initializer:
+            maker = StateMaker(
+                self._batch_task,
+                host,
+                fields,
+                host_fields=per_world.host,
+                episode_model=episode_model,
+            )
             producer = StateProducer(
                 maker,
                 workers=state_workers,
@@ -267,6 +285,7 @@ class BatchEnvironment:
                 task_factory=task_factory,
                 batch_task_type=type(self._batch_task),
                 model_fields=fields,
+                host_fields=per_world.host,
             )
             self._slots = StateSlots(
                 self._physics,

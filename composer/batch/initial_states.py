@@ -1,11 +1,13 @@
 """Initial states of a batch's episodes, drawn by the CPU task's own initializers off the
 caller's thread.
 
-A `StateMaker` runs the CPU task's `initialize_episode` hooks (task and entities) on a host
-`mjcf.Physics`, inside its `reset_context`, with one world's random generator, and records
-what a world needs to start that episode: the physics state (`mjSTATE_INTEGRATION`), the
-rows of the batched model fields, and the `BatchTask`'s `initial_values`. The distribution of
-initial states is therefore the CPU task's by construction.
+A `StateMaker` runs the CPU task's `initialize_episode_mjcf` hooks and patches their changes
+into a host `mjcf.Physics` (`composer.batch.variations`), then its `initialize_episode`
+hooks (task and entities) inside its `reset_context`, with one world's random generator, as
+a CPU environment's reset does, and records what a world needs to start that episode: the
+physics state (`mjSTATE_INTEGRATION`), the rows of the batched model fields, and the
+`BatchTask`'s `initial_values`. The distribution of initial states (and of the model's
+variations) is therefore the CPU task's by construction.
 
 A `StateProducer` runs makers on worker threads (one maker each) or worker processes (each
 builds its own task from a picklable `task_factory`). A job is one world's next episodes,
@@ -24,6 +26,7 @@ import numpy as np
 
 import composer
 import mjcf
+from composer.batch.variations import EpisodeModel, model_arrays
 from composer.hooks import EnvironmentHooks
 
 __all__ = ["InitialState", "Job", "JobResult", "StateMaker", "StateProducer", "Submitted"]
@@ -66,14 +69,6 @@ class JobResult(NamedTuple):
     random_state: np.random.RandomState
 
 
-def _model_arrays(model: mujoco.MjModel) -> dict[str, np.ndarray]:
-    return {
-        name: value.copy()
-        for name in dir(model)
-        if not name.startswith("_") and isinstance(value := getattr(model, name), np.ndarray)
-    }
-
-
 class StateMaker:
     """Makes initial states with the CPU task of `batch_task` on the host `physics`.
 
@@ -83,19 +78,38 @@ class StateMaker:
       physics: the host `mjcf.Physics` of that task, after its `after_compile` hooks ran.
       model_fields: the batched model fields whose rows are recorded (and restored to the
         compiled values before every episode, as a fresh world has them).
+      host_fields: model fields that vary per world but that the device does not have:
+        restored before every episode like `model_fields`, not recorded.
+      episode_model: the `EpisodeModel` of `physics` (made here, counting MJCF changes from
+        now, if None).
 
     Raises:
-      RuntimeError (from a call): if a hook changed the MJCF model (that needs a recompile),
-        or changed a model field outside `model_fields` differently from the first episode.
+      NotImplementedError (from a call): for an MJCF change that needs a recompile (see
+        `composer.batch.variations`).
+      RuntimeError (from a call): if `initialize_episode` changed the MJCF model, or changed
+        a model field outside `model_fields` differently from the first episode.
     """
 
-    def __init__(self, batch_task, physics: mjcf.Physics, model_fields: Sequence[str]):
+    def __init__(
+        self,
+        batch_task,
+        physics: mjcf.Physics,
+        model_fields: Sequence[str],
+        *,
+        host_fields: Sequence[str] = (),
+        episode_model: EpisodeModel | None = None,
+    ):
         self._batch_task = batch_task
         self._hooks = EnvironmentHooks(batch_task.task)
         self._physics = physics
+        root = batch_task.task.root_entity.mjcf_model
+        self._episode_model = episode_model or EpisodeModel(self._hooks, physics, root)
         model = physics.model.ptr
-        self._pristine = {name: getattr(model, name).copy() for name in model_fields}
-        self._reference = _model_arrays(model)
+        self._model_fields = tuple(model_fields)
+        self._pristine = {
+            name: getattr(model, name).copy() for name in (*model_fields, *host_fields)
+        }
+        self._reference = model_arrays(model)
         self._shared: dict[str, np.ndarray] | None = None
 
     def __call__(self, random_state: np.random.RandomState) -> InitialState:
@@ -104,15 +118,17 @@ class StateMaker:
         model, data = physics.model.ptr, physics.data.ptr
         task = self._batch_task.task
         root = task.root_entity.mjcf_model
-        count = root.modification_count
         for name, value in self._pristine.items():
             getattr(model, name)[...] = value
+        self._episode_model(random_state)
+        count = root.modification_count
         with physics.reset_context():
             self._hooks.initialize_episode(physics, random_state)
         if root.modification_count != count:
             raise RuntimeError(
-                f"{type(task).__name__}.initialize_episode changed the MJCF model; a batch "
-                "compiles its model once (MJCF variations are refused)"
+                f"{type(task).__name__}.initialize_episode changed the MJCF model, which a "
+                "CPU environment compiles at the next reset; a batch does not (change it in "
+                "initialize_episode_mjcf)"
             )
         state = np.empty(mujoco.mj_stateSize(model, _STATE_SPEC))
         mujoco.mj_getState(model, data, state, _STATE_SPEC)
@@ -127,13 +143,13 @@ class StateMaker:
         for name, value in self._shared.items():
             if not np.array_equal(getattr(model, name), value, equal_nan=True):
                 raise RuntimeError(
-                    f"initialize_episode changed model field {name!r} differently per world, "
-                    f"but all worlds share it; declare it in batched_model_fields=({name!r},) "
-                    "to give each world its own"
+                    f"the episode's initializers changed model field {name!r} differently per "
+                    f"world, but all worlds share it; declare it in batched_model_fields="
+                    f"({name!r},) to give each world its own"
                 )
         return InitialState(
             state=state,
-            model_rows={name: getattr(model, name).copy() for name in self._pristine},
+            model_rows={name: getattr(model, name).copy() for name in self._model_fields},
             values={
                 name: np.asarray(value, dtype=np.float32)
                 for name, value in self._batch_task.initial_values().items()
@@ -148,23 +164,26 @@ class StateMaker:
 
 
 def build_maker(
-    task_factory: Callable[[], composer.Task], batch_task_type: type, model_fields: Sequence[str]
+    task_factory: Callable[[], composer.Task],
+    batch_task_type: type,
+    model_fields: Sequence[str],
+    host_fields: Sequence[str] = (),
 ) -> StateMaker:
     """A `StateMaker` over a new task from `task_factory`, compiled on its own physics."""
     task = task_factory()
     physics = mjcf.Physics.from_mjcf_model(task.root_entity.mjcf_model)
     with physics.reset_context():
         EnvironmentHooks(task).after_compile(physics, np.random.RandomState(0))
-    return StateMaker(batch_task_type(task), physics, model_fields)
+    return StateMaker(batch_task_type(task), physics, model_fields, host_fields=host_fields)
 
 
 # The maker of a worker process (one per process).
 _process_maker: StateMaker | None = None
 
 
-def _start_process(task_factory, batch_task_type, model_fields) -> None:
+def _start_process(task_factory, batch_task_type, model_fields, host_fields) -> None:
     global _process_maker
-    _process_maker = build_maker(task_factory, batch_task_type, model_fields)
+    _process_maker = build_maker(task_factory, batch_task_type, model_fields, host_fields)
 
 
 def _run_in_process(jobs: list[Job]) -> list[JobResult]:
@@ -182,7 +201,8 @@ class StateProducer:
         throughput scales with the host's cores) instead of threads.
       task_factory: a picklable callable returning a new CPU task of the same kind; needed
         for more than one worker or for processes.
-      batch_task_type, model_fields: what each worker's `StateMaker` is built with.
+      batch_task_type, model_fields, host_fields: what each worker's `StateMaker` is built
+        with.
 
     Raises:
       ValueError: for more than one worker, or processes, without a `task_factory`.
@@ -197,6 +217,7 @@ class StateProducer:
         task_factory: Callable[[], composer.Task] | None = None,
         batch_task_type: type | None = None,
         model_fields: Sequence[str] = (),
+        host_fields: Sequence[str] = (),
     ):
         if task_factory is None and (workers > 1 or processes):
             raise ValueError(
@@ -210,14 +231,15 @@ class StateProducer:
                 workers,
                 mp_context=multiprocessing.get_context("spawn"),
                 initializer=_start_process,
-                initargs=(task_factory, batch_task_type, tuple(model_fields)),
+                initargs=(task_factory, batch_task_type, tuple(model_fields), tuple(host_fields)),
             )
             self._run = _run_in_process
         else:
             makers = [maker]
             if task_factory is not None:
                 makers = [
-                    build_maker(task_factory, batch_task_type, model_fields) for _ in range(workers)
+                    build_maker(task_factory, batch_task_type, model_fields, host_fields)
+                    for _ in range(workers)
                 ]
             free = list(makers)
             lock = threading.Lock()

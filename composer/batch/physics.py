@@ -29,7 +29,7 @@ from composer.batch.arrays import ArrayBridge, array_library
 from composer.batch.bindings import BatchBinding, FieldView, NamedViews, StructViews
 from mujoco_physics import field_layout
 
-__all__ = ["BatchPhysics", "ContactWatch"]
+__all__ = ["BatchPhysics", "ContactWatch", "device_model_fields"]
 
 _ACC_STAGE = int(mujoco.mjtStage.mjSTAGE_ACC)
 _STATE_SPEC = int(mujoco.mjtState.mjSTATE_INTEGRATION)
@@ -37,6 +37,16 @@ _STATE_SPEC = int(mujoco.mjtState.mjSTATE_INTEGRATION)
 
 def _spec_shape(field_type) -> tuple:
     return tuple(getattr(field_type, "shape", ()) or ())
+
+
+def device_model_fields() -> dict[str, bool]:
+    """MuJoCo Warp's model fields, each with whether it can hold one row per world.
+
+    Returns:
+      Field name (as in `mujoco.MjModel`) -> True for a field `put_model` can batch.
+    """
+    mjw = _warp.load()[1]
+    return {f.name: _spec_shape(f.type)[:1] == ("*",) for f in dataclasses.fields(mjw.Model)}
 
 
 class ContactWatch:
@@ -109,9 +119,7 @@ class BatchPhysics:
         self.batched_model_fields = frozenset(batched_model_fields)
         self.device = arrays.device
         self.is_cuda = self.device.is_cuda
-        batchable = {
-            f.name for f in dataclasses.fields(mjw.Model) if _spec_shape(f.type)[:1] == ("*",)
-        }
+        batchable = {name for name, per_world in device_model_fields().items() if per_world}
         unknown = sorted(self.batched_model_fields - batchable)
         if unknown:
             raise ValueError(

@@ -1,7 +1,10 @@
 """What a batch cannot run, refused by name before anything is compiled.
 
-A batch steps its sub-steps on the device without Python between them, and compiles its
-model once: CPU hooks that need either are refused with the owner and hook named.
+A batch steps its sub-steps on the device without Python between them, and runs the CPU
+task's episode hooks only on the producers of its initial states: CPU hooks that need
+Python between sub-steps, or a producer where there is none, are refused with the owner and
+hook named. (MJCF variations are checked attribute by attribute in
+`composer.batch.variations`.)
 """
 
 import composer
@@ -39,15 +42,15 @@ def refuse_unbatched_hooks(hooks: EnvironmentHooks, batch_task: BatchTask) -> No
         )
 
 
-def refuse_mjcf_variations(task: composer.Task) -> None:
-    """Raises NotImplementedError if the task or an entity changes its MJCF per episode."""
-    owners = [task, *task.root_entity.iter_entities()]
-    base_hooks = (composer.Task.initialize_episode_mjcf, composer.Entity.initialize_episode_mjcf)
-    for owner in owners:
-        hook = getattr(type(owner), "initialize_episode_mjcf", None)
-        if hook is not None and hook not in base_hooks:
-            raise NotImplementedError(
-                f"{type(owner).__name__}.initialize_episode_mjcf changes the MJCF model per "
-                "episode, which needs a recompile; a batch compiles once (put per-world "
-                "physics variation in batched_model_fields instead)"
-            )
+def refuse_mjcf_variations(batch_task: BatchTask) -> None:
+    """Raises NotImplementedError if the task or an entity changes its MJCF per episode while
+    `batch_task` sets initial states with array code, where no CPU hook runs."""
+    task = batch_task.task
+    owners = _hook_owners(task, ("initialize_episode_mjcf",))
+    if owners:
+        raise NotImplementedError(
+            f"{', '.join(owners)} varies the MJCF model per episode, but "
+            f"{type(batch_task).__name__} sets initial states with array code, where no CPU "
+            "hook runs: a per-world variation runs on the producers of the CPU task's initial "
+            "states (leave BatchTask.initialize_episode as it is)"
+        )

@@ -43,7 +43,8 @@ class BatchTask:
     Attributes:
       batched_model_fields: MjModel fields the task's initializers write per world (for
         instance 'site_pos' for a target site placed at every reset); the environment gives
-        each world its own row of these.
+        each world its own row of these, and of the fields it finds the task's episodes
+        vary (`composer.batch.variations`).
       episode_values: the current episode's values of every world (see
         `episode_values`), by name, arrays of shape (num_envs, *value shape), set by the
         environment; empty until the first reset.

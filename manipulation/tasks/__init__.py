@@ -3,6 +3,14 @@
 Importing this package registers every task family's environments in `registry`.
 """
 
-from manipulation.tasks import lift, place, reach, reassemble, registry, stack
+from manipulation.tasks import lift, lift_randomised, place, reach, reassemble, registry, stack
 
-__all__ = ["lift", "place", "reach", "reassemble", "registry", "stack"]
+__all__ = [
+    "lift",
+    "lift_randomised",
+    "place",
+    "reach",
+    "reassemble",
+    "registry",
+    "stack",
+]

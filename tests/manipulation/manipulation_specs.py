@@ -1,4 +1,5 @@
-"""The observation keys, shapes and dtypes of dm_control's manipulation suite, per environment.
+"""The observation keys, shapes and dtypes of dm_control's manipulation suite, per environment,
+and of this project's own task, `lift_brick_randomised_features`.
 
 Written from the suite's documented observations (dm_control 1.0.50); every shape has the
 leading buffer axis of length 1.
@@ -59,6 +60,9 @@ _FEATURES = {
     "reach_site": {"target_position": ((1, 3), _F64)},
 }
 
+# This project's task beyond dm_control's suite (features only): lift_brick's observations.
+_OWN_FEATURES = {"lift_brick_randomised": _bricks(1)}
+
 _NO_VISION = frozenset({"stack_3_bricks_random_order"})
 _CAMERA = {"front_close": ((1, 84, 84, 3), np.dtype(np.uint8))}
 
@@ -67,6 +71,8 @@ for _base, _extra in _FEATURES.items():
     EXPECTED_SPECS[f"{_base}_features"] = {**_PROPRIOCEPTION, **_extra}
     if _base not in _NO_VISION:
         EXPECTED_SPECS[f"{_base}_vision"] = {**_CAMERA, **_PROPRIOCEPTION}
+for _base, _extra in _OWN_FEATURES.items():
+    EXPECTED_SPECS[f"{_base}_features"] = {**_PROPRIOCEPTION, **_extra}
 
 FEATURES_NAMES = tuple(name for name in EXPECTED_SPECS if name.endswith("_features"))
 VISION_NAMES = tuple(name for name in EXPECTED_SPECS if name.endswith("_vision"))

@@ -13,8 +13,9 @@ import composer
 import manipulation
 
 
-def test_all_lists_the_25_environments_of_the_suite():
-    assert len(manipulation.ALL) == 25
+def test_all_lists_dm_controls_25_environments_and_the_randomised_lift():
+    assert len(manipulation.ALL) == 26
+    assert "lift_brick_randomised_features" in manipulation.ALL
     assert set(manipulation.ALL) == set(EXPECTED_SPECS)
 
 

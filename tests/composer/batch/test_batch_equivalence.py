@@ -158,7 +158,10 @@ def _cpu_environments(name: str) -> list[composer.Environment]:
 
 @pytest.mark.parametrize(
     "name",
-    [pytest.param(n, marks=_KNOWN_DIFFERENCES.get(n, ())) for n in manipulation_batch.BATCHED_FEATURES],
+    [
+        pytest.param(n, marks=_KNOWN_DIFFERENCES.get(n, ()))
+        for n in manipulation_batch.BATCHED_FEATURES
+    ],
 )
 def test_every_world_matches_its_cpu_environment_for_20_control_steps(name):
     batch_env = manipulation_batch.load(name, NUM_ENVS, random_states=SEEDS, device="cpu")

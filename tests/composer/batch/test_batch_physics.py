@@ -94,18 +94,6 @@ def test_observations_have_the_cpu_shapes_behind_the_world_axis(env):
         assert observation[key].shape == (NUM_ENVS, *value.shape), key
 
 
-class _VariedReach(Reach):
-    def initialize_episode_mjcf(self, random_state) -> None:
-        self.arena.mjcf_model.worldbody.geom[0].rgba = random_state.uniform(size=4)
-
-
-def test_mjcf_variation_is_refused_because_it_needs_a_recompile():
-    with pytest.raises(
-        NotImplementedError, match=r"_VariedReach.initialize_episode_mjcf.*recompile"
-    ):
-        BatchEnvironment(_VariedReach(observation_settings.FEATURES), 2)
-
-
 class _SubstepReach(Reach):
     def after_substep(self, physics, random_state) -> None:
         physics.data.qfrc_applied[0] = 0.0

@@ -182,4 +182,4 @@ def test_every_task_passes_gymnasiums_env_checker_in_human_mode(display, tmp_pat
         timeout=540,
     )
     assert results == dict.fromkeys(manipulation.ALL, "passed")
-    assert len(results) == 25
+    assert len(results) == 26
