@@ -1,16 +1,19 @@
-"""Trains SAC (Stable-Baselines3) on reach_site_features within a wall-clock budget.
+"""Trains SAC (Stable-Baselines3) on a manipulation task within a wall-clock budget.
 
-The training episodes run in a `composer.gym.ThreadedVectorEnv` seen by SB3 through
-`composer.rl.sb3` (the extra `[sb3]`). Every `--eval-every` seconds the deterministic
-policy plays 5 seeded 10 s episodes (the same 5 each time, in a vector env of their own);
-the script prints their mean return and mean final distance from the pinch site to the
-target. The learning rate falls from 1e-3 to 1e-4 over the budget. When the budget is
-spent it writes the learning curve to OUT/learning_curve.csv and OUT/learning_curve.png
-(with matplotlib), the last policy to OUT/sac_reach_site.zip and the one with the best
-evaluation return to OUT/best_sac_reach_site.zip.
+The task is `--task`, reach_site_features unless told otherwise (any task with the tag
+'features'). The training episodes run in a `composer.gym.ThreadedVectorEnv` seen by SB3
+through `composer.rl.sb3` (the extra `[sb3]`). Before training, uniformly random actions
+play 5 seeded 10 s episodes, the baseline; then every `--eval-every` seconds the
+deterministic policy plays the same 5 (in a vector env of their own). The script prints
+their mean return and success rate (`info['is_success']` at the episode's end) and, for
+reach_site_features, the mean final distance from the pinch site to the target. The
+learning rate falls from 1e-3 to 1e-4 over the budget. When the budget is spent it writes
+the learning curve to OUT/learning_curve.csv and OUT/learning_curve.png (with
+matplotlib), the last policy to OUT/sac_TASK.zip and the one with the best evaluation
+return to OUT/best_sac_TASK.zip.
 
-Usage: python examples/train_sb3.py [--minutes 10] [--out runs/train_sb3]
-  [--num-envs 4] [--seed 0] [--eval-every 30] [--smoke]
+Usage: python examples/train_sb3.py [--task reach_site_features] [--minutes 10]
+  [--out runs/train_sb3] [--num-envs 4] [--seed 0] [--eval-every 30] [--smoke]
 
 --smoke trains for a few hundred steps and evaluates once (seconds; for CI).
 """
@@ -40,7 +43,8 @@ try:
 except ImportError as error:
     sys.exit(f"{error}\nThis example needs the extra [sb3]: pip install -e '.[sb3]'")
 
-ENVIRONMENT = "reach_site_features"
+# The task whose evaluations also report the final distance to the target.
+REACH = "reach_site_features"
 EVAL_EPISODES = 5
 # The evaluation episodes' seeds: EVAL_SEED, ..., EVAL_SEED + 4 (the training envs' are
 # --seed onwards).
@@ -65,13 +69,27 @@ class ReachDistance(gymnasium.Wrapper):
         return observation, reward, terminated, truncated, info
 
 
-def make_env(max_episode_steps: int | None = None) -> gymnasium.Env:
-    """reach_site_features with flattened observations (45 floats) and the distance in its
-    infos; with `max_episode_steps`, episodes end (truncated) after that many steps."""
-    env: gymnasium.Env = GymnasiumEnv(manipulation.load(ENVIRONMENT), flatten_observations=True)
+def make_env(task: str, max_episode_steps: int | None = None) -> gymnasium.Env:
+    """`task` with flattened observations (45 floats for reach_site_features), and for
+    reach_site_features the distance in its infos; with `max_episode_steps`, episodes end
+    (truncated) after that many steps."""
+    env: gymnasium.Env = GymnasiumEnv(manipulation.load(task), flatten_observations=True)
     if max_episode_steps is not None:
         env = gymnasium.wrappers.TimeLimit(env, max_episode_steps)
-    return ReachDistance(env)
+    return ReachDistance(env) if task == REACH else env
+
+
+class RandomPolicy:
+    """Uniformly random actions within the action space's bounds, as SB3's `predict`
+    hands them out, drawn from a generator seeded with `seed`."""
+
+    def __init__(self, action_space: gymnasium.spaces.Box, seed: int):
+        self._space = action_space
+        self._rng = np.random.default_rng(seed)
+
+    def predict(self, observation, state=None, episode_start=None, deterministic=False):
+        shape = (len(observation), *self._space.shape)
+        return self._rng.uniform(self._space.low, self._space.high, shape), None
 
 
 class Evaluation(NamedTuple):
@@ -82,20 +100,31 @@ class Evaluation(NamedTuple):
     updates: int
     train_return: float
     eval_return: float
-    eval_distance: float
+    #: None for a task other than reach_site_features.
+    eval_distance: float | None
     eval_success: float
 
 
-def evaluate(model: SAC, eval_env) -> tuple[float, float, float]:
-    """Mean return, final distance (m) and success rate of the policy's deterministic
-    actions over the 5 seeded evaluation episodes."""
+class Score(NamedTuple):
+    """Means over the 5 seeded evaluation episodes."""
+
+    episode_return: float
+    success: float
+    #: The final distance (m) to the target; None for a task other than reach_site_features.
+    distance: float | None
+
+
+def evaluate(model, eval_env) -> Score:
+    """Scores `model` (an SB3 model, whose actions are then deterministic, or a
+    `RandomPolicy`) over the 5 seeded evaluation episodes."""
     distances: list[float] = []
     successes: list[float] = []
 
     def read_episode_ends(local_vars, _globals):
         for info, done in zip(local_vars["infos"], local_vars["dones"]):
             if done:
-                distances.append(info["distance"])
+                if "distance" in info:
+                    distances.append(info["distance"])
                 successes.append(float(info.get("is_success", np.nan)))
 
     eval_env.seed(EVAL_SEED)
@@ -107,7 +136,8 @@ def evaluate(model: SAC, eval_env) -> tuple[float, float, float]:
         return_episode_rewards=True,
         callback=read_episode_ends,
     )
-    return float(np.mean(returns)), float(np.mean(distances)), float(np.mean(successes))
+    distance = float(np.mean(distances)) if distances else None
+    return Score(float(np.mean(returns)), float(np.mean(successes)), distance)
 
 
 def wall_clock_schedule(start: float, deadline: float, initial: float, final: float):
@@ -148,7 +178,7 @@ class EvaluateAndStop(BaseCallback):
         return time.perf_counter() < self._deadline
 
     def evaluate(self) -> None:
-        eval_return, distance, success = evaluate(self.model, self._eval_env)
+        score = evaluate(self.model, self._eval_env)
         buffer = self.model.ep_info_buffer
         train_return = float(np.mean([e["r"] for e in buffer])) if buffer else float("nan")
         point = Evaluation(
@@ -156,28 +186,31 @@ class EvaluateAndStop(BaseCallback):
             env_steps=self.model.num_timesteps,
             updates=self.model._n_updates,
             train_return=train_return,
-            eval_return=eval_return,
-            eval_distance=distance,
-            eval_success=success,
+            eval_return=score.episode_return,
+            eval_distance=score.distance,
+            eval_success=score.success,
         )
         self.curve.append(point)
         if self.best is None or point.eval_return > self.best.eval_return:
             self.best = point
             self.model.save(self._best_path)
+        distance = "" if point.eval_distance is None else f" {point.eval_distance:15.3f}"
         print(
             f"{point.seconds:7.0f} {point.env_steps:9d} {point.updates:8d} "
-            f"{point.train_return:12.1f} {point.eval_return:11.1f} "
-            f"{point.eval_distance:15.3f} {point.eval_success:12.1f}",
+            f"{point.train_return:12.1f} {point.eval_return:11.1f}{distance} "
+            f"{point.eval_success:12.1f}",
             flush=True,
         )
 
 
-def write_curve(curve: list[Evaluation], out: pathlib.Path) -> None:
-    """Writes OUT/learning_curve.csv, and OUT/learning_curve.png when matplotlib is there."""
+def write_curve(curve: list[Evaluation], task: str, out: pathlib.Path) -> None:
+    """Writes OUT/learning_curve.csv (without the distance column for a task other than
+    reach_site_features), and OUT/learning_curve.png when matplotlib is there."""
+    columns = [f for f in Evaluation._fields if not (f == "eval_distance" and task != REACH)]
     with open(out / "learning_curve.csv", "w", newline="") as file:
         writer = csv.writer(file)
-        writer.writerow(Evaluation._fields)
-        writer.writerows(curve)
+        writer.writerow(columns)
+        writer.writerows([getattr(point, column) for column in columns] for point in curve)
     try:
         import matplotlib
 
@@ -189,16 +222,19 @@ def write_curve(curve: list[Evaluation], out: pathlib.Path) -> None:
         )
         return
     minutes = [point.seconds / 60 for point in curve]
-    figure, (returns, distances) = pyplot.subplots(1, 2, figsize=(10, 4))
+    figure, (returns, right) = pyplot.subplots(1, 2, figsize=(10, 4))
     returns.plot(minutes, [p.eval_return for p in curve], marker="o", label="evaluation")
-    returns.plot(minutes, [p.train_return for p in curve], label="training episodes (4 s)")
+    returns.plot(minutes, [p.train_return for p in curve], label="training episodes")
     returns.set(xlabel="wall-clock minutes", ylabel="return (10 s episode)", ylim=(0, 250))
     returns.legend()
-    distances.plot(minutes, [p.eval_distance for p in curve], marker="o")
-    distances.set(
-        xlabel="wall-clock minutes", ylabel="final distance to target (m)", ylim=(0, None)
-    )
-    figure.suptitle(f"SAC on {ENVIRONMENT}")
+    if task == REACH:
+        right.plot(minutes, [p.eval_distance for p in curve], marker="o")
+        right.set(ylabel="final distance to target (m)", ylim=(0, None))
+    else:
+        right.plot(minutes, [p.eval_success for p in curve], marker="o")
+        right.set(ylabel="success rate (evaluation)", ylim=(-0.05, 1.05))
+    right.set(xlabel="wall-clock minutes")
+    figure.suptitle(f"SAC on {task}")
     figure.tight_layout()
     figure.savefig(out / "learning_curve.png", dpi=100)
     pyplot.close(figure)
@@ -206,6 +242,9 @@ def write_curve(curve: list[Evaluation], out: pathlib.Path) -> None:
 
 def main(argv: list[str] | None = None) -> list[Evaluation]:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument(
+        "--task", default=REACH, choices=manipulation.get_environments_by_tag("features")
+    )
     parser.add_argument("--minutes", type=float, default=10.0, help="wall-clock budget")
     parser.add_argument("--out", type=pathlib.Path, default=pathlib.Path("runs/train_sb3"))
     parser.add_argument("--num-envs", type=int, default=4, help="training sub-environments")
@@ -228,11 +267,21 @@ def main(argv: list[str] | None = None) -> list[Evaluation]:
 
     # One thread for torch: the vector env's threads use the other cores.
     torch.set_num_threads(1)
+    eval_env = make_vec_env(functools.partial(make_env, args.task), EVAL_EPISODES)
+    print(f"SAC on {args.task}, {args.num_envs} training envs, budget {args.minutes:g} min")
+    baseline = evaluate(RandomPolicy(eval_env.action_space, args.seed), eval_env)
+    print(
+        f"random actions: return {baseline.episode_return:.1f}, success rate "
+        f"{baseline.success:.1f}"
+        + ("" if baseline.distance is None else f", distance {baseline.distance:.3f} m")
+    )
+    # The budget starts here: the baseline's seconds are not the policy's.
     start = time.perf_counter()
     train_env = make_vec_env(
-        functools.partial(make_env, args.train_episode_steps), args.num_envs, seed=args.seed
+        functools.partial(make_env, args.task, args.train_episode_steps),
+        args.num_envs,
+        seed=args.seed,
     )
-    eval_env = make_vec_env(make_env, EVAL_EPISODES)
     # The smoke run ends after its steps and evaluates once, at the end.
     deadline = math.inf if args.smoke else start + args.minutes * 60
     every = math.inf if args.smoke else args.eval_every
@@ -250,22 +299,22 @@ def main(argv: list[str] | None = None) -> list[Evaluation]:
         seed=args.seed,
         device="cpu",
     )
-    best_path = args.out / "best_sac_reach_site.zip"
+    best_path = args.out / f"best_sac_{args.task}.zip"
     callback = EvaluateAndStop(eval_env, start, deadline, every, best_path)
-    print(f"SAC on {ENVIRONMENT}, {args.num_envs} training envs, budget {args.minutes:g} min")
-    print("seconds env_steps  updates train_return eval_return eval_distance_m eval_success")
+    distance = " eval_distance_m" if args.task == REACH else ""
+    print(f"seconds env_steps  updates train_return eval_return{distance} eval_success")
     model.learn(total_timesteps=300 if args.smoke else 10**9, callback=callback)
     if args.smoke:
         callback.evaluate()
-    write_curve(callback.curve, args.out)
-    model.save(args.out / "sac_reach_site.zip")
+    write_curve(callback.curve, args.task, args.out)
+    model.save(args.out / f"sac_{args.task}.zip")
     train_env.close()
     eval_env.close()
     final, best = callback.curve[-1], callback.best
     print(
-        f"final: return {final.eval_return:.1f}, distance {final.eval_distance:.3f} m after "
-        f"{final.seconds:.0f} s; best: return {best.eval_return:.1f}, distance "
-        f"{best.eval_distance:.3f} m after {best.seconds:.0f} s ({best_path.name})"
+        f"final: return {final.eval_return:.1f}, success rate {final.eval_success:.1f} after "
+        f"{final.seconds:.0f} s; best: return {best.eval_return:.1f}, success rate "
+        f"{best.eval_success:.1f} after {best.seconds:.0f} s ({best_path.name})"
     )
     print(f"wrote {args.out}/learning_curve.csv, the policies and (with matplotlib) the plot")
     return callback.curve

@@ -1,5 +1,6 @@
 """Builders of the docs site's generated parts: the task gallery, the diagrams, the performance
-charts and their data, the MkDocs hook that runs them, and page screenshots."""
+charts and their data, the learning curves, the MkDocs hook that runs them, and page
+screenshots."""
 
 from tools import ROOT
 

@@ -1,8 +1,9 @@
 """MkDocs hooks that generate the docs' pictures and gallery before each build (see mkdocs.yml).
 
 Before the files are collected, docs/generated/ (ignored by git) is filled with the task
-gallery (`tools.docs.gallery`), the lifecycle and observables diagrams (`tools.docs.figures`)
-and the performance charts and tables (`tools.docs.charts`). The marker
+gallery (`tools.docs.gallery`), the lifecycle and observables diagrams (`tools.docs.figures`),
+the performance charts and tables (`tools.docs.charts`) and the learning curves
+(`tools.docs.learning_curves`). The marker
 `<!-- benchmark-results -->` in a page is replaced by those tables.
 
 Each builder runs as `python -m tools.docs.NAME` in its own interpreter, from the folder of
@@ -49,7 +50,12 @@ def on_pre_build(config, **kwargs) -> None:
     _generated_in_this_process = True
     out = _generated_dir(config)
     out.mkdir(parents=True, exist_ok=True)
-    for module in ("tools.docs.gallery", "tools.docs.figures", "tools.docs.charts"):
+    for module in (
+        "tools.docs.gallery",
+        "tools.docs.figures",
+        "tools.docs.charts",
+        "tools.docs.learning_curves",
+    ):
         _run_builder(config, module, out)
 
 
