@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import hashlib
+from collections.abc import Mapping
 
 from mjcf import constants
 
@@ -15,16 +16,28 @@ class Asset:
       extension: the file extension including the dot, e.g. '.stl'; MuJoCo picks the
         decoder from it.
       prefix: a readable stem for the file name the asset gets in generated XML.
+      dependencies: VFS filename -> contents of the files that this file names and MuJoCo
+        reads with it (a sub-model's meshes, textures and nested sub-models); they reach
+        the compile, and exports, next to it. The contents name them by these filenames,
+        which hold digests of the files, so equal contents have equal dependencies.
     """
 
-    __slots__ = ("contents", "extension", "prefix", "_vfs_filename")
+    __slots__ = ("contents", "extension", "prefix", "dependencies", "_vfs_filename")
 
-    def __init__(self, contents: bytes | str, extension: str, prefix: str = ""):
+    def __init__(
+        self,
+        contents: bytes | str,
+        extension: str,
+        prefix: str = "",
+        *,
+        dependencies: Mapping[str, bytes] | None = None,
+    ):
         if isinstance(contents, str):
             contents = contents.encode("utf-8")
         self.contents = contents
         self.extension = extension.lower() if extension else ""
         self.prefix = prefix
+        self.dependencies = dict(dependencies) if dependencies else {}
         self._vfs_filename = None
 
     def get_vfs_filename(self) -> str:

@@ -31,6 +31,10 @@ MUJOCO = "mujoco"
 # as it would in MuJoCo rather than compile under a name the user never gave.
 NAMED_ON_DEMAND_SECTIONS = ("asset", "custom")
 
+# Asset kinds that MuJoCo names after their file (without directory and extension) when
+# they have no name, and lets you reference by that name.
+ASSETS_NAMED_AFTER_FILE = ("mesh", "texture", "hfield", "skin")
+
 # Namespace under which attachment frames are found by `find`.
 ATTACHMENT_FRAME = "attachment_frame"
 

@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import difflib
-import os
 from typing import NamedTuple
 
 import mujoco
@@ -34,15 +33,6 @@ _ON_DEMAND = frozenset(("inertial", "freejoint"))
 _WORLD = "world"
 # How many distinct (element, attribute) changes a model records between structural changes.
 _MAX_RECORDED_CHANGES = 4096
-
-# Which compiler attribute names the directory of each file-bearing element's files.
-_ASSET_DIRECTORY = {
-    "mesh": "meshdir",
-    "skin": "meshdir",
-    "hfield": "meshdir",
-    "flexcomp": "meshdir",
-    "texture": "texturedir",
-}
 
 
 def _close_matches(word: str, candidates) -> str:
@@ -444,29 +434,16 @@ class Element:
 
     def _load_file(self, name: str, path: str) -> Asset:
         root = self._root
-        scope = root._namescope
-        directory = ""
         compiler = root._singleton_if_present("compiler")
-        if compiler is not None:
-            directory = compiler._attributes.get(_ASSET_DIRECTORY.get(self._spec.name, "")) or ""
-            if not directory:
-                directory = compiler._attributes.get("assetdir") or ""
-        stem, extension = os.path.splitext(os.path.basename(path))
-        for key in (path, os.path.normpath(os.path.join(directory, path)) if directory else None):
-            if key is not None and key in scope.assets:
-                return Asset(scope.assets[key], extension, stem)
-        full_path = path
-        if not os.path.isabs(full_path):
-            full_path = os.path.join(scope.model_dir, directory, path)
-        try:
-            with open(full_path, "rb") as handle:
-                contents = handle.read()
-        except OSError as error:
-            raise FileNotFoundError(
-                f"{self._describe()} attribute {name!r}: cannot read file {path!r} "
-                f"(looked for {full_path!r}: {error.strerror})"
-            ) from None
-        return Asset(contents, extension, stem)
+        scope = root._namescope
+        return model_files.load(
+            self._spec.name,
+            path,
+            where=f"{self._describe()} attribute {name!r}",
+            compiler=compiler._attributes if compiler is not None else {},
+            model_dir=scope.model_dir,
+            assets=scope.assets,
+        )
 
     # -------------------------------------------------------------------------- children
 
@@ -1254,7 +1231,8 @@ _CLASS_ATTRIBUTES = frozenset(
 _ElementImpl = Element
 
 # These modules implement what the element classes' methods delegate to (XML writing,
-# `attach`, copying, reference resolution), and they build and inspect elements, so they
-# import the classes above: imported last, they find them defined whichever is imported first.
+# `attach`, copying, reference resolution, reading files), and they build and inspect elements
+# (or, as `model_files`, parse through `parser`), so they import the classes above: imported
+# last, they find them defined whichever is imported first.
 from mjcf import attachment as attachment_module  # noqa: E402
-from mjcf import copier, parser, xml_writer  # noqa: E402
+from mjcf import copier, model_files, parser, xml_writer  # noqa: E402

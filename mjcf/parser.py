@@ -143,6 +143,32 @@ def from_zip(
     )
 
 
+def read_document(text: bytes, model_dir: str, assets: dict | None, context: str) -> etree._Element:
+    """The `<mujoco>` root of MJCF document `text`, its `<include>`s expanded.
+
+    Args:
+      text: the document.
+      model_dir: directory that `<include>` files are resolved against.
+      assets: filename -> bytes, looked up before the disk for includes.
+      context: what the document is, to begin error messages with.
+
+    Returns:
+      The lxml element of `<mujoco>`, comments and blank text removed.
+
+    Raises:
+      MJCFSyntaxError: the document, or a file it includes, is not well-formed XML.
+      ValueError: the root element is not `<mujoco>`.
+    """
+    try:
+        document = _parse_xml(text)
+    except etree.XMLSyntaxError as error:
+        raise MJCFSyntaxError.wrapping(error, f"{context}: invalid MJCF XML") from None
+    if document.tag != constants.MUJOCO:
+        raise ValueError(f"{context}: the root element must be <mujoco>, got <{document.tag}>")
+    _expand_includes(document, model_dir, assets, ())
+    return document
+
+
 def _read_include(file_name: str, model_dir: str, assets: dict | None):
     if assets and file_name in assets:
         text = assets[file_name]

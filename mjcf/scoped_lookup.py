@@ -13,9 +13,6 @@ if TYPE_CHECKING:
 _SEP = constants.PREFIX_SEPARATOR
 _WORLD = "world"
 
-# Asset kinds that MuJoCo lets you reference by file name when they have no name.
-_NAMED_BY_FILE = ("mesh", "texture", "hfield", "skin")
-
 
 def split_identifier(identifier: str) -> tuple[str, str | None]:
     """Splits 'scope/rest' at the first unescaped separator; ('name', None) if there is none."""
@@ -60,7 +57,7 @@ def lookup(root: RootElement, namespace: str, identifier: str) -> Element | None
     found = root._namescope.find(namespace, identifier)
     if found is None and namespace == constants.BODY and identifier == _WORLD:
         return root.worldbody
-    if found is None and namespace in _NAMED_BY_FILE:
+    if found is None and namespace in constants.ASSETS_NAMED_AFTER_FILE:
         found = _unnamed_asset_by_file(root, namespace, identifier)
     return found
 

@@ -382,6 +382,7 @@ class _Writer:
                         filename = value.get_vfs_filename()
                         if self.assets is not None:
                             self.assets[filename] = value.contents
+                            self.assets.update(value.dependencies)
                         value = filename
                     head += f' {name}="{_escape(value)}"'
         head += name_text
@@ -848,6 +849,7 @@ def collect_assets(root: RootElement) -> dict[str, bytes]:
                 if isinstance(value, Asset) and spec_attributes[name].type.kind == _FILE:
                     value = _file_asset(element, value, prefix)
                     assets[value.get_vfs_filename()] = value.contents
+                    assets.update(value.dependencies)
             stack.extend([c for c in reversed(element._children) if c._spec.holds_files])
     return assets
 

@@ -111,6 +111,8 @@ def test_every_element_and_attribute_can_be_added_set_and_written(spec, tags):
         value = _sample_value(attribute.type, serial)
         if tags == ("default",) and name == "class":
             value = "main"  # MuJoCo's top-level default class cannot be renamed
+        if tags[-1] == "model" and name == "file":
+            value = mjcf.Asset(b"<mujoco/>", ".xml", "sample")  # parsed back as MJCF
         setattr(element, attribute.python_name, value)
         values[name] = value
     xml = element.to_xml_string(pretty_print=False)
