@@ -15,7 +15,7 @@ longer holds what they last gave (it was recompiled in between), and built anew 
 fails. What follows from the written values (subtree masses, inverse weights, ...) is
 left to `mj_setConst`, which the patch table requires after a size write, and the model
 statistics to `mjcf.model_statistics`. That the result equals a recompile is proven by
-`tools/patch_proof.py`, like every pair of the table.
+`mjcf/patch_proof.py`, like every pair of the table.
 
 Declined (the caller recompiles): geoms other than sphere, capsule, ellipsoid, cylinder and
 box, in the changed geom's body too; geoms given by `fromto` (the compiled size is not the

@@ -3,13 +3,14 @@
 A change of an attribute value whose compiled field is the value itself (a colour, a
 friction, a gain, ...) does not need MuJoCo's compiler: writing the value into the field
 gives the same `MjModel` a recompile would. Which (tag, attribute) pairs are like that is
-not decided here but proven, for the installed MuJoCo, by `tools/patch_proof.py`: it
+not decided here but proven, for the installed MuJoCo, by `mjcf.patch_proof`: it
 changes each candidate attribute on real models, patches one copy, recompiles another and
 requires every `MjModel` array and every `MjData` array after `mj_forward` to be
-bit-identical. The proven pairs are the generated table `mjcf/patchable_attributes.py`,
-with, for each, whether `mj_setConst` must run after the write (for fields MuJoCo derives
-constants from, such as masses); the harness runs in CI and fails when the table is stale.
-On a MuJoCo release other than the one the table was proven on nothing is patched.
+bit-identical. The proven pairs, with, for each, whether `mj_setConst` must run after the
+write (for fields MuJoCo derives constants from, such as masses), are the generated table
+`mjcf/patchable_attributes.py` on the release it was proven on (CI fails when it is
+stale), or a proof cached for the installed release: `mjcf.patch_table` says which applies.
+Where none does, nothing is patched, and the first look warns.
 
 A change is patched when every changed (element, attribute) of
 `RootElement.attribute_changes_since` is proven, compiled into the Physics and resolvable:
@@ -30,7 +31,7 @@ from mjcf import (
     binding,
     geom_size_patch,
     model_statistics,
-    patchable_attributes,
+    patch_table,
     traversal_utils,
 )
 from mjcf.element import Element
@@ -47,8 +48,8 @@ _GEOM_SIZE = ("geom", "size")
 
 
 def patch_supported() -> bool:
-    """Whether the proven table applies to the installed MuJoCo."""
-    return mujoco.__version__ == patchable_attributes.MUJOCO_VERSION
+    """Whether a proven table applies to the installed MuJoCo (see `mjcf.patch_table`)."""
+    return patch_table.current() is not None
 
 
 def patch_model(physics, layout: ModelLayout, changes, *, proven: dict | None = None) -> bool:
@@ -60,7 +61,7 @@ def patch_model(physics, layout: ModelLayout, changes, *, proven: dict | None = 
       layout: the row look-ups of `physics`'s model.
       changes: (element, XML attribute name) pairs, as `attribute_changes_since` gives them.
       proven: (tag, attribute) -> whether `mj_setConst` must follow, in place of the
-        generated table (for the proof harness, which decides what the table holds).
+        table that applies (for the proof, which decides what a table holds).
 
     Returns:
       True when the model now equals a fresh compile (the physics' data is left to the
@@ -68,9 +69,10 @@ def patch_model(physics, layout: ModelLayout, changes, *, proven: dict | None = 
       nothing, when some change cannot be patched (see the module docstring).
     """
     if proven is None:
-        if not patch_supported():
+        table = patch_table.current()
+        if table is None:
             return False
-        proven = patchable_attributes.PROVEN
+        proven = table.proven
     writes = []
     sized_geoms = {}
     set_const = False

@@ -10,7 +10,7 @@ mass-matrix diagonal. A value the model's `<statistic>` sets replaces the comput
 
 The arithmetic follows the compiler's order (sequential sums, the same distance formula),
 so that the numbers are bit-identical to a recompile's on the installed MuJoCo; that is
-checked by `tools/patch_proof.py` wherever a patch relies on it.
+checked by `mjcf/patch_proof.py` wherever a patch relies on it.
 """
 
 from __future__ import annotations
@@ -29,6 +29,9 @@ _MIN_SIZE = 1e-5
 # and the radius of a plane infinite in both directions.
 _UNBOUNDED_FRACTION = 0.1
 _INFINITE_PLANE_RADIUS = 0.01
+# Fills the mass matrix `data.qM`: `mj_makeM` where it exists (it came with tendon armature,
+# which it adds); before it (mujoco 3.3.0), `mj_crb` wrote the whole matrix.
+_make_mass_matrix = getattr(mujoco, "mj_makeM", None) or mujoco.mj_crb
 
 
 class Statistics(NamedTuple):
@@ -58,7 +61,7 @@ def compiled_statistics(model: mujoco.MjModel, data: mujoco.MjData) -> Statistic
     mujoco.mj_resetData(model, data)
     mujoco.mj_kinematics(model, data)
     mujoco.mj_comPos(model, data)
-    mujoco.mj_makeM(model, data)
+    _make_mass_matrix(model, data)
 
     # Bounding box of body frames, centres of mass, joint anchors, sites and geoms.
     points = np.concatenate([data.xpos[1:], data.xipos[1:], data.xanchor, data.site_xpos])
@@ -85,8 +88,7 @@ def compiled_statistics(model: mujoco.MjModel, data: mujoco.MjData) -> Statistic
 
     meaninertia = float(model.stat.meaninertia)
     if model.nv:
-        diagonal = data.M[model.M_rowadr + model.M_rownnz - 1]
-        meaninertia = float(np.cumsum(diagonal)[-1] / model.nv)
+        meaninertia = float(np.cumsum(_mass_matrix_diagonal(model, data))[-1] / model.nv)
     return Statistics(center, float(extent), meansize, meanmass, meaninertia)
 
 
@@ -100,6 +102,14 @@ def write_statistics(model: mujoco.MjModel, statistics: Statistics, *, keep=()) 
             model.stat.center[:] = value
         else:
             setattr(model.stat, name, value)
+
+
+def _mass_matrix_diagonal(model: mujoco.MjModel, data: mujoco.MjData) -> np.ndarray:
+    """The mass matrix's diagonal, one entry per degree of freedom: from its compressed rows
+    `data.M` where they exist, else (mujoco 3.3.0) from `data.qM` at `dof_Madr`."""
+    if hasattr(data, "M"):
+        return data.M[model.M_rowadr + model.M_rownnz - 1]
+    return data.qM[model.dof_Madr]
 
 
 def _min_rows(points: np.ndarray) -> list[np.ndarray]:

@@ -24,7 +24,9 @@ exists).
 Prints a per-file table with subtotals per package, the failing test ids with the known
 reasons, a per-task table, the MoMa table and the totals; exits 1 when the test pass rate
 is below `--floor`, a task fails, or a MoMa test that passes on dm_control 1.0.50 + mujoco
-3.17 fails here.
+3.17 fails here. The test counts of a run of every package, and the environments' results,
+are saved in `docs/data/dm_control_conformance.json` (committed: the README's Status table
+quotes them, and `tests/test_readme_status.py` checks that it does so correctly).
 """
 
 from __future__ import annotations
@@ -43,6 +45,8 @@ from typing import NamedTuple
 from tools import ROOT, moma_conformance, scratch_venv
 
 CACHE = scratch_venv.CACHE / "dm_control_conformance"
+#: The figures a run leaves for the README (see the module docstring).
+SUMMARY = ROOT / "docs" / "data" / "dm_control_conformance.json"
 DM_CONTROL_VERSION = "1.0.50"
 # What dm_control's tests import beyond its own requirements; protobuf below 7, whose
 # FieldDescriptor no longer has the `label` that dm_control 1.0.50's mocap loader reads (its
@@ -424,6 +428,39 @@ def print_task_table(results: dict) -> int:
     return sum(not r["ok"] for r in results.values())
 
 
+def save_summary(section: str, figures: dict) -> None:
+    """Replaces `section` of the summary file `SUMMARY` with `figures`, keeping the others
+    (a run of the tests alone leaves the environments' figures of an earlier run)."""
+    summary = json.loads(SUMMARY.read_text(encoding="utf-8")) if SUMMARY.exists() else {}
+    summary["dm_control"] = DM_CONTROL_VERSION
+    summary[section] = figures
+    SUMMARY.write_text(json.dumps(summary, indent=1) + "\n", encoding="utf-8")
+
+
+def _test_figures(results: list[FileResult]) -> dict:
+    """Passed, failed and skipped tests per dm_control package, and in total."""
+    prefixes = {package: package + "/" for package in TESTED_PACKAGES} | {"total": ""}
+    figures = {}
+    for label, prefix in prefixes.items():
+        in_package = [r for r in results if r.path.startswith(prefix)]
+        figures[label] = {
+            "passed": sum(r.passed for r in in_package),
+            "failed": sum(r.failed for r in in_package),
+            "skipped": sum(r.skipped for r in in_package),
+        }
+    return figures
+
+
+def _environment_figures(results: dict) -> dict:
+    """How many environments of each group ran, of how many."""
+    figures = {}
+    for result in results.values():
+        group = figures.setdefault(result["group"], {"ok": 0, "total": 0})
+        group["ok"] += bool(result["ok"])
+        group["total"] += 1
+    return figures
+
+
 def ensure_conformance_venv() -> Path:
     """Returns the python of the harness's venv (this project, dm_control 1.0.50, the
     newest MuJoCo that pip gives it, and MoMa where its wheels exist), made if needed."""
@@ -454,11 +491,14 @@ def main() -> int:
     if not args.tasks_only:
         results, failing = run_tests(python, copy_tests(python, tuple(args.packages)))
         rate = print_test_table(results, failing)
+        if set(args.packages) == set(TESTED_PACKAGES):
+            save_summary("tests", _test_figures(results))
         if rate < args.floor:
             print(f"pass rate {rate:.1%} is below the floor {args.floor:.1%}")
             status = 1
     if not args.tests_only:
         outcome = run_tasks(python)
+        save_summary("environments", _environment_figures(outcome["environments"]))
         if print_task_table(outcome["environments"]) + print_trajectory_table(
             outcome["trajectories"]
         ):

@@ -4,8 +4,11 @@ Usage: `python -m tools.mujoco_versions [--releases 3.3 4.0] [--strict] [-- PYTE
 
 Builds one venv per release under `.cache/mujoco_versions/<version>` (kept between runs;
 `--venvs` puts them elsewhere), installs this project with its `[test]` extra and that
-`mujoco` there, and runs `pytest` in each with `MUJOCO_GL=egl`; each run's full output
-goes to `logs/<version>.txt` beside the venvs. The releases are the newest patch of every
+`mujoco` there, proves there which MJCF attributes a reset may patch in place
+(`python -m mjcf.patch_proof`: on the release of the checked-in table it checks the table,
+on any other it caches its proof, in `xdg_cache/` beside the venvs), and runs `pytest` in
+each with `MUJOCO_GL=egl` and that proof; each run's full output goes to
+`logs/<version>.txt` beside the venvs. The releases are the newest patch of every
 minor release that pip offers from the project's floor (`mujoco_physics.version.MINIMUM_VERSION`)
 up, the floor version itself, and the newest release below the floor, where importing the
 project must fail with the ImportError that names both versions. `--releases` picks some:
@@ -33,6 +36,7 @@ CACHE = ROOT / ".cache" / "mujoco_versions"
 _COMPAT_MODULE = ROOT / "mujoco_physics" / "version.py"
 _TAIL_LINES = 15
 _SUMMARY_COUNT = re.compile(r"(\d+) (passed|failed|skipped|errors?|xfailed|xpassed)")
+_PROVEN_COUNT = re.compile(r"^(\d+) pairs patch, ", re.M)
 
 
 class Release(NamedTuple):
@@ -53,6 +57,7 @@ class Outcome(NamedTuple):
     seconds: float
     problem: str  # empty when the run reached pytest's summary
     details: tuple[str, ...]  # pytest's FAILED/ERROR lines, or the log's tail on a problem
+    patched: int | None  # the pairs `mjcf.patch_proof` proved; None where it did not run
 
     @property
     def ok(self) -> bool:
@@ -203,12 +208,16 @@ def run_release(release: Release, venvs: Path, pytest_args: list[str]) -> Outcom
         problem = _install(venv, release, log)
     if problem:
         tail = tuple(log_path.read_text(encoding="utf-8").splitlines()[-_TAIL_LINES:])
-        return Outcome(release.version, 0, 0, 0, time.monotonic() - start, problem, tail)
+        return Outcome(release.version, 0, 0, 0, time.monotonic() - start, problem, tail, None)
     if release.below_floor:
         return _check_import_refused(release, venv, log_path, start)
+    env = dict(os.environ, MUJOCO_GL="egl", XDG_CACHE_HOME=str(venvs / "xdg_cache"))
+    env.pop("VIRTUAL_ENV", None)
+    patched, problem = _prove_patch_table(venv, env, log_path)
+    if problem:
+        tail = tuple(log_path.read_text(encoding="utf-8").splitlines()[-_TAIL_LINES:])
+        return Outcome(release.version, 0, 0, 0, time.monotonic() - start, problem, tail, patched)
     with open(log_path, "a") as log:
-        env = dict(os.environ, MUJOCO_GL="egl")
-        env.pop("VIRTUAL_ENV", None)
         args = [str(venv / "bin" / "python"), "-m", "pytest", "-q", "-p", "no:cacheprovider"]
         log.write(f"$ {' '.join(args + pytest_args)}\n")
         log.flush()
@@ -221,7 +230,7 @@ def run_release(release: Release, venvs: Path, pytest_args: list[str]) -> Outcom
     if counts is None:
         tail = tuple((result.stdout + result.stderr).splitlines()[-_TAIL_LINES:])
         return Outcome(
-            release.version, 0, 0, 0, seconds, f"no pytest summary, see {log_path}", tail
+            release.version, 0, 0, 0, seconds, f"no pytest summary, see {log_path}", tail, patched
         )
     failures = tuple(
         line for line in result.stdout.splitlines() if line.startswith(("FAILED ", "ERROR "))
@@ -234,7 +243,24 @@ def run_release(release: Release, venvs: Path, pytest_args: list[str]) -> Outcom
         seconds,
         "",
         failures,
+        patched,
     )
+
+
+def _prove_patch_table(venv: Path, env: dict[str, str], log_path: Path) -> tuple[int | None, str]:
+    """Runs `python -m mjcf.patch_proof` in `venv`; returns the number of pairs it proved
+    (None when it printed none) and a problem, or '' when it exited 0."""
+    with open(log_path, "a") as log:
+        args = [str(venv / "bin" / "python"), "-m", "mjcf.patch_proof"]
+        log.write(f"$ {' '.join(args)}\n")
+        log.flush()
+        result = subprocess.run(args, cwd=ROOT, env=env, capture_output=True, text=True)
+        log.write(result.stdout + result.stderr)
+    match = _PROVEN_COUNT.search(result.stdout)
+    patched = int(match.group(1)) if match else None
+    if result.returncode:
+        return patched, f"patch proof failed (exit {result.returncode}), see {log_path}"
+    return patched, ""
 
 
 def _check_import_refused(release: Release, venv: Path, log_path: Path, start: float) -> Outcome:
@@ -253,16 +279,25 @@ def _check_import_refused(release: Release, venv: Path, log_path: Path, start: f
     expected = f"ImportError: this project needs mujoco>={minimum_version()}, but mujoco "
     refused = last.startswith(expected + f"{release.version} is installed")
     seconds = time.monotonic() - start
-    return Outcome(release.version, int(refused), int(not refused), 0, seconds, "", (last,))
+    return Outcome(release.version, int(refused), int(not refused), 0, seconds, "", (last,), None)
 
 
 def print_table(outcomes: list[Outcome], below_floor: set[str]) -> None:
-    print(f"{'mujoco':<10}{'passed':>8}{'failed':>8}{'skipped':>9}{'seconds':>9}  result")
+    """Prints one row per release: its test counts, the MJCF attribute pairs its patch
+    proof proved ('-' where none ran) and the result."""
+    print(
+        f"{'mujoco':<10}{'passed':>8}{'failed':>8}{'skipped':>9}{'patched':>9}{'seconds':>9}"
+        "  result"
+    )
     for o in outcomes:
         result = o.problem or ("ok" if o.ok else "FAILED")
         if o.version in below_floor and not o.problem:
             result += ": below the floor, import " + ("refused" if o.ok else "NOT refused")
-        print(f"{o.version:<10}{o.passed:>8}{o.failed:>8}{o.skipped:>9}{o.seconds:>9.0f}  {result}")
+        patched = "-" if o.patched is None else str(o.patched)
+        print(
+            f"{o.version:<10}{o.passed:>8}{o.failed:>8}{o.skipped:>9}{patched:>9}"
+            f"{o.seconds:>9.0f}  {result}"
+        )
 
 
 def main(argv: list[str] | None = None) -> int:

@@ -2,11 +2,13 @@
 
 `ensure_venv(path, requirements, project=True, no_deps=())` creates `path` once with the
 given pip requirements (and this project installed editable, and `no_deps` installed without
-their dependencies), and reuses it while the requirements are unchanged.
+their dependencies), and reuses it while the requirements and the project's
+`pyproject.toml` are unchanged.
 """
 
 from __future__ import annotations
 
+import hashlib
 import shutil
 import subprocess
 import sys
@@ -26,17 +28,18 @@ def ensure_venv(
 ) -> Path:
     """Returns the python of a venv at `path` holding `requirements`.
 
-    The venv is rebuilt when the requirements differ from the ones it was built with. With
-    `project` the working tree is (re)installed editable on every call, without touching
-    its dependencies, so the venv always runs the current code. `no_deps` are installed
-    last, with `pip --no-deps` (packages whose pinned dependencies would replace the ones
+    With `project` the working tree is installed editable, so the venv runs the current
+    code without a reinstall. The venv is rebuilt when the requirements differ from the
+    ones it was built with, or, with `project`, when the project's `pyproject.toml` (its
+    dependencies, version and packages) or its folder does. `no_deps` are installed last,
+    with `pip --no-deps` (packages whose pinned dependencies would replace the ones
     installed before them).
     """
     python = path / "bin" / "python"
     stamp = path / "scratch-venv-requirements"
     wanted = "\n".join(
         [*requirements, *(f"--no-deps {requirement}" for requirement in no_deps)]
-        + [f"project={project}"]
+        + [f"project={_project_stamp() if project else False}"]
     )
     if not (stamp.exists() and stamp.read_text(encoding="utf-8") == wanted):
         shutil.rmtree(path, ignore_errors=True)
@@ -49,6 +52,11 @@ def ensure_venv(
         if no_deps:
             _pip(python, "--no-deps", *no_deps)
         stamp.write_text(wanted)
-    elif project:
-        _pip(python, "--no-deps", "-e", str(ROOT))
     return python
+
+
+def _project_stamp() -> str:
+    """The project's folder and its pyproject.toml's digest: what an editable install of it
+    was made from."""
+    digest = hashlib.sha256((ROOT / "pyproject.toml").read_bytes()).hexdigest()
+    return f"{ROOT} {digest}"

@@ -2,16 +2,17 @@
 
 A CPU `composer.Environment` brings its model up to date at every reset: the
 `initialize_episode_mjcf` hooks (an `MJCFVariator`) change MJCF attributes, and the changes
-of attributes proven patchable (`mjcf.model_patch`, its table `mjcf.patchable_attributes`
-proven by `tools.patch_proof`) are written into the compiled model, followed by
-`mj_setConst` where the table marks the attribute; the `initialize_episode` hooks (a
-`PhysicsVariator`) then write model fields through `physics.bind`. A batch compiles once and
-does the same for each world: the initial-state producer that makes a world's episode runs
-both hooks on its host physics with that world's generator (`EpisodeModel` for the first),
-and the model fields they changed travel with the initial state as the world's rows of
-per-world model fields, written at its reset (`composer.batch.state_slots`). `mj_setConst`
-therefore runs on the producer, in float64 as on the CPU, for the episodes whose changes
-need it, and a reset touches no world but the ones it starts.
+of attributes proven patchable (`mjcf.model_patch`, with the proof `mjcf.patch_table` finds
+for the installed MuJoCo, made by `python -m mjcf.patch_proof`) are written into the
+compiled model, followed by `mj_setConst` where the table marks the attribute; the
+`initialize_episode` hooks (a `PhysicsVariator`) then write model fields through
+`physics.bind`. A batch compiles once and does the same for each world: the initial-state
+producer that makes a world's episode runs both hooks on its host physics with that world's
+generator (`EpisodeModel` for the first), and the model fields they changed travel with the
+initial state as the world's rows of per-world model fields, written at its reset
+(`composer.batch.state_slots`). `mj_setConst` therefore runs on the producer, in float64 as
+on the CPU, for the episodes whose changes need it, and a reset touches no world but the
+ones it starts.
 
 Which fields get a row per world is measured once, before the model goes on the device
 (`measure`): two probe episodes, with generators of their own, run the hooks on the host
@@ -41,7 +42,7 @@ import numpy as np
 
 import mjcf
 from composer.hooks import EnvironmentHooks
-from mjcf import binding, model_patch, patchable_attributes
+from mjcf import binding, patch_table, patchable_attributes
 
 __all__ = ["EpisodeModel", "PerWorldFields", "measure", "model_arrays", "per_world_fields"]
 
@@ -62,19 +63,21 @@ def model_arrays(model: mujoco.MjModel) -> dict[str, np.ndarray]:
 
 def _unpatchable_reason(element, attribute: str) -> str | None:
     """Why a change of `element`'s `attribute` cannot be written in place, or None."""
-    if not model_patch.patch_supported():
+    table = patch_table.current()
+    if table is None:
         return (
-            f"the attributes written in place were proven on mujoco "
-            f"{patchable_attributes.MUJOCO_VERSION}, this is mujoco {mujoco.__version__} "
-            "(`python -m tools.patch_proof --write` proves them on it)"
+            f"no proof of the attributes written in place applies to mujoco "
+            f"{mujoco.__version__} (the checked-in one is of mujoco "
+            f"{patchable_attributes.MUJOCO_VERSION}; `{patch_table.PROOF_COMMAND}` proves "
+            "them on this release)"
         )
     pair = (element.tag, attribute)
-    if pair in patchable_attributes.PROVEN:
+    if pair in table.proven:
         return None
-    why = patchable_attributes.REFUSED.get(pair)
+    why = table.refused.get(pair)
     if why is None:
-        return "tools.patch_proof does not cover it (its compiled value is not the attribute's)"
-    return f"tools.patch_proof refuses it: {why}"
+        return "the proof does not cover it (its compiled value is not the attribute's)"
+    return f"the proof refuses it: {why}"
 
 
 def _refusal(element, attribute: str, reason: str) -> NotImplementedError:

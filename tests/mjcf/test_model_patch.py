@@ -173,11 +173,14 @@ def test_an_attached_models_values_patch_through_the_parent(scene):
     _assert_equals_a_recompile(root, physics)
 
 
-def test_nothing_patches_on_a_mujoco_the_table_was_not_proven_on(scene, monkeypatch):
+def test_nothing_patches_on_a_mujoco_the_table_was_not_proven_on(scene, monkeypatch, tmp_path):
     root, physics, count = scene
     monkeypatch.setattr(patchable_attributes, "MUJOCO_VERSION", "0.0.0")
+    # No proof of this release cached either (see tests/mjcf/test_patch_table.py).
+    monkeypatch.setenv("XDG_CACHE_HOME", str(tmp_path))
     root.find("geom", "upper").rgba = [0.2, 0.4, 0.6, 0.8]
-    assert not model_patch.patch_supported()
+    with pytest.warns(RuntimeWarning, match="python -m mjcf.patch_proof"):
+        assert not model_patch.patch_supported()
     assert not _patch(root, physics, count)
 
 

@@ -50,3 +50,46 @@ def test_output_without_a_summary_line_has_no_counts():
 
 def test_the_floor_is_read_from_the_module_that_enforces_it():
     assert mujoco_versions.minimum_version() == "3.3.0"
+
+
+def _fake_venv(tmp_path, script: str):
+    python = tmp_path / "venv" / "bin" / "python"
+    python.parent.mkdir(parents=True)
+    python.write_text("#!/bin/sh\n" + script)
+    python.chmod(0o755)
+    return python.parent.parent
+
+
+def test_the_patch_proof_runs_in_the_release_venv_and_its_count_is_read(tmp_path):
+    venv = _fake_venv(
+        tmp_path,
+        'echo "patch  geom  rgba  write"\n'
+        'echo "72 pairs patch, 221 recompile (30 s)"\n'
+        'echo "ran $* with cache $XDG_CACHE_HOME"\n',
+    )
+    log = tmp_path / "log.txt"
+    env = {"XDG_CACHE_HOME": str(tmp_path / "xdg"), "PATH": "/usr/bin:/bin"}
+    assert mujoco_versions._prove_patch_table(venv, env, log) == (72, "")
+    assert f"ran -m mjcf.patch_proof with cache {tmp_path / 'xdg'}" in log.read_text()
+
+
+def test_a_failing_patch_proof_is_a_problem_of_the_release(tmp_path):
+    venv = _fake_venv(tmp_path, 'echo "mjcf/patchable_attributes.py is stale" >&2\nexit 1\n')
+    log = tmp_path / "log.txt"
+    patched, problem = mujoco_versions._prove_patch_table(venv, {"PATH": "/usr/bin:/bin"}, log)
+    assert patched is None
+    assert problem == f"patch proof failed (exit 1), see {log}"
+    assert "is stale" in log.read_text()
+
+
+def test_the_table_shows_how_many_pairs_each_release_proved(capsys):
+    outcomes = [
+        mujoco_versions.Outcome("3.2.7", 1, 0, 0, 2.0, "", (), None),
+        mujoco_versions.Outcome("3.3.0", 1700, 0, 30, 90.0, "", (), 72),
+    ]
+    mujoco_versions.print_table(outcomes, {"3.2.7"})
+    rows = capsys.readouterr().out.splitlines()
+    header = ["mujoco", "passed", "failed", "skipped", "patched", "seconds", "result"]
+    assert rows[0].split() == header
+    assert rows[1].split()[:6] == ["3.2.7", "1", "0", "0", "-", "2"]
+    assert rows[2].split() == ["3.3.0", "1700", "0", "30", "72", "90", "ok"]

@@ -68,7 +68,7 @@ def test_a_variation_of_an_unproven_attribute_is_refused_with_the_proofs_reason(
     with pytest.raises(
         NotImplementedError,
         match=r"<geom name='floor'> attribute 'pos', changed by initialize_episode_mjcf: needs "
-        r"a recompile, .*tools.patch_proof refuses it: .*body_inertia",
+        r"a recompile, .*the proof refuses it: .*body_inertia",
     ):
         batch.BatchEnvironment(task, 2)
 
@@ -94,13 +94,15 @@ def test_a_change_of_the_models_structure_is_refused():
 
 
 def test_every_mjcf_variation_is_refused_on_a_mujoco_release_the_table_is_not_proven_on(
-    monkeypatch,
+    monkeypatch, tmp_path
 ):
     monkeypatch.setattr(patchable_attributes, "MUJOCO_VERSION", "3.0.0")
+    monkeypatch.setenv("XDG_CACHE_HOME", str(tmp_path))  # no cached proof either
     with pytest.raises(
         NotImplementedError,
-        match=r"<site name='target'> attribute 'rgba'.*proven on mujoco 3\.0\.0, this is "
-        rf"mujoco {re.escape(mujoco.__version__)}",
+        match=rf"<site name='target'> attribute 'rgba'.*applies to mujoco "
+        rf"{re.escape(mujoco.__version__)} \(the checked-in one is of mujoco 3\.0\.0; "
+        r"`python -m mjcf.patch_proof` proves",
     ):
         batch.BatchEnvironment(_tinted_reach(), 2)
 

@@ -1,0 +1,105 @@
+"""mjcf.patch_proof proves value-only attributes and refuses those the compiler derives."""
+
+import copy
+import itertools
+import os
+import subprocess
+import sys
+
+import mujoco
+import pytest
+
+import mjcf
+from mjcf import patch_proof
+
+_BALL = "<mujoco><worldbody><body><freejoint/><geom size='0.1'/></body></worldbody></mujoco>"
+
+
+@pytest.mark.patch_table
+def test_colour_and_geom_size_are_proven_and_positions_are_refused_with_their_fields():
+    proven, refused = patch_proof._verdicts(
+        patch_proof.prove({("geom", "rgba"), ("geom", "size"), ("geom", "pos"), ("body", "pos")})
+    )
+    # A size moves the body's inertia and the model's statistics: mj_setConst must follow.
+    assert proven == {("geom", "rgba"): False, ("geom", "size"): True}
+    # A geom's position moves its body's inertial frame; a body's, derived constants.
+    assert "body_ipos" in refused["geom", "pos"]
+    assert "body_invweight0" in refused["body", "pos"]
+
+
+def test_candidates_are_float_attributes_of_compiled_objects():
+    candidates = patch_proof._candidates()
+    assert {("geom", "rgba"), ("joint", "damping"), ("motor", "ctrlrange")} <= candidates
+    # Names, references and keywords are never candidates.
+    assert not {("geom", "name"), ("geom", "material"), ("geom", "type")} & candidates
+
+
+def test_data_arrays_that_differ_between_copies_of_one_model_do_not_refuse_a_pair(monkeypatch):
+    # On mujoco 3.3.0 mj_forward leaves the island arrays unwritten: they hold scratch with
+    # addresses in it, which two forwards may or may not leave alike. An array that differs
+    # between forwards of copies of one compiled model says nothing about a patch; one that
+    # differs with the model's values does.
+    model = mjcf.Physics.from_xml_string(_BALL).model.ptr
+    forwards = itertools.count()
+
+    def data_arrays(model, data):
+        # The scratch repeats for two forwards, then changes.
+        scratch = next(forwards) // 2
+        return {"dof_island": bytes([scratch]), "geom_xpos": model.geom_rgba.tobytes()}
+
+    monkeypatch.setattr(patch_proof, "_data_arrays", data_arrays)
+    assert patch_proof._scratch_arrays(model) == {"dof_island"}
+    recoloured = copy.copy(model)
+    recoloured.geom_rgba[0] = [0, 1, 0, 1]
+    assert patch_proof._differences(recoloured, model) == ["geom_rgba", "data.geom_xpos"]
+    next(forwards)  # now the patched and the compiled model's forwards leave different scratch
+    assert patch_proof._differences(copy.copy(model), model) == []
+
+
+def test_on_an_unproven_release_the_command_caches_a_proof_that_the_next_process_uses(tmp_path):
+    # The checked-in table claims another release, so the installed one is unproven; the
+    # proof runs on one scene for two pairs (the full corpus takes half a minute).
+    fake_release = (
+        "import mjcf\n"
+        "from mjcf import patchable_attributes\n"
+        "patchable_attributes.MUJOCO_VERSION = '0.0.0'\n"
+    )
+    prove = fake_release + (
+        "from mjcf import patch_proof\n"
+        "patch_proof._candidates = lambda: {('geom', 'rgba'), ('geom', 'pos')}\n"
+        "scene = patch_proof._SCENES['primitives (radian)']\n"
+        "patch_proof._corpus = lambda extra: iter([('scene', mjcf.from_xml_string(scene))])\n"
+        "raise SystemExit(patch_proof.main([]))\n"
+    )
+    use = fake_release + (
+        "from mjcf import patch_table\n"
+        'root = mjcf.from_xml_string("<mujoco><worldbody><body><freejoint/>'
+        "<geom name='ball' size='0.1'/></body></worldbody></mujoco>\")\n"
+        "physics = mjcf.Physics.from_mjcf_model(root)\n"
+        "ball = root.find('geom', 'ball')\n"
+        "count = root.modification_count\n"
+        "ball.rgba = [0, 1, 0, 1]\n"
+        "colour = physics.apply_attribute_changes(root.attribute_changes_since(count))\n"
+        "count = root.modification_count\n"
+        "ball.pos = [0, 0, 1]\n"
+        "position = physics.apply_attribute_changes(root.attribute_changes_since(count))\n"
+        "print(colour, position, sorted(patch_table.current().proven))\n"
+    )
+    env = dict(os.environ, XDG_CACHE_HOME=str(tmp_path))
+    proving = subprocess.run(
+        [sys.executable, "-c", prove], env=env, capture_output=True, text=True, timeout=300
+    )
+    assert proving.returncode == 0, proving.stderr
+    path = tmp_path / "mujoco-composer" / "patch_proof" / f"mujoco-{mujoco.__version__}.json"
+    assert f"wrote {path}" in proving.stdout
+    assert "1 pairs patch, 1 recompile" in proving.stdout
+    # A RuntimeWarning (no proof, or an unreadable one) would fail the second process.
+    using = subprocess.run(
+        [sys.executable, "-W", "error::RuntimeWarning", "-c", use],
+        env=env,
+        capture_output=True,
+        text=True,
+        timeout=300,
+    )
+    assert using.returncode == 0, using.stderr
+    assert using.stdout.split("\n")[0] == "True False [('geom', 'rgba')]"
