@@ -6,14 +6,14 @@ needs the extra `[ray]`, imported only when one is made; `VideoRecorder` writes 
 with the extra `[video]`, imported on its first recorded episode.
 """
 
-from composer.gym.batched import BatchedVectorEnv, SubEnvironmentError
 from composer.gym.env import GymnasiumEnv
 from composer.gym.ray_vector import RayVectorEnv
+from composer.gym.sub_env_vector import SubEnvironmentError, SubEnvVectorEnv
 from composer.gym.threaded import ThreadedVectorEnv
 from composer.gym.video_recorder import VideoRecorder
 
 __all__ = [
-    "BatchedVectorEnv",
+    "SubEnvVectorEnv",
     "GymnasiumEnv",
     "RayVectorEnv",
     "SubEnvironmentError",

@@ -20,7 +20,7 @@ from typing import Any, NamedTuple
 
 import gymnasium
 
-from composer.gym.batched import SubEnvironmentError, check_spaces_match
+from composer.gym.sub_env_vector import SubEnvironmentError, check_spaces_match
 from composer.gym.thread_pool import PinnedThreadPool
 
 __all__ = ["HostSpec", "SubEnvFailure", "SubEnvHost", "pack", "unpack"]

@@ -3,7 +3,7 @@
 Needs the optional extra `[ray]`; Ray is imported when a `RayVectorEnv` is made, never
 when this module is imported. Each actor (a `composer.gym._ray_host.SubEnvHost`) holds
 `envs_per_actor` consecutive sub-environments on its own threads, so one actor call per
-vector step steps all of them. Batching, seeding and autoreset are `BatchedVectorEnv`'s,
+vector step steps all of them. Batching, seeding and autoreset are `SubEnvVectorEnv`'s,
 and the per-sub-environment functions are the same module functions the threaded
 vector env runs, so with the same seeds and actions the results are bit-identical.
 
@@ -44,10 +44,10 @@ import gymnasium
 from gymnasium.vector import AutoresetMode
 
 from composer.gym._ray_host import HostSpec, SubEnvFailure, SubEnvHost, pack, unpack
-from composer.gym.batched import (
-    BatchedVectorEnv,
+from composer.gym.sub_env_vector import (
     SubEnvironmentError,
     SubEnvOutcome,
+    SubEnvVectorEnv,
     check_spaces_match,
     read_row,
     reset_sub_env,
@@ -105,7 +105,7 @@ class _Gathered(NamedTuple):
     lost: tuple[int, ...]
 
 
-class RayVectorEnv(BatchedVectorEnv):
+class RayVectorEnv(SubEnvVectorEnv):
     """A `gymnasium.vector.VectorEnv` whose sub-environments live in Ray actors.
 
     Actor k holds sub-environments k * envs_per_actor up to (k + 1) * envs_per_actor - 1
@@ -138,7 +138,7 @@ class RayVectorEnv(BatchedVectorEnv):
       call_timeout: the longest wait, in seconds, for the actors' replies to one call
         (`reset`, `step`, `call`, `render`, `close`, ...).
       autoreset_mode: an `AutoresetMode` (or its value); NEXT_STEP by default.
-      copy: return copies of the observation arrays (see `BatchedVectorEnv`).
+      copy: return copies of the observation arrays (see `SubEnvVectorEnv`).
 
     Raises:
       ImportError: if Ray is not installed.

@@ -22,7 +22,7 @@ import time
 from collections.abc import Callable, Collection
 from typing import Any
 
-from composer.gym.batched import SubEnvironmentError
+from composer.gym.sub_env_vector import SubEnvironmentError
 from composer.utils import argument_checks
 
 __all__ = ["PinnedThreadPool", "WorkerDiedError"]

@@ -13,20 +13,20 @@ from typing import Any
 import gymnasium
 from gymnasium.vector import AutoresetMode
 
-from composer.gym.batched import BatchedVectorEnv, check_spaces_match
+from composer.gym.sub_env_vector import SubEnvVectorEnv, check_spaces_match
 from composer.gym.thread_pool import PinnedThreadPool
 
 __all__ = ["ThreadedVectorEnv"]
 
 
-class ThreadedVectorEnv(BatchedVectorEnv):
+class ThreadedVectorEnv(SubEnvVectorEnv):
     """A `gymnasium.vector.VectorEnv` whose sub-environments run on a pool of threads.
 
     Sub-environment i is built by `env_fns[i]()` and always runs on the same thread:
     the thread that made the vector env for i % num_threads == 0, worker thread
     i % num_threads otherwise (see `PinnedThreadPool`). So the vector env is used from
     the thread that made it; other threads get a RuntimeError. Batching, seeding and
-    the autoreset modes are those of `BatchedVectorEnv`. `close()` closes the
+    the autoreset modes are those of `SubEnvVectorEnv`. `close()` closes the
     sub-environments and joins the worker threads (waiting at most 10 s for them).
 
     Args:
@@ -35,7 +35,7 @@ class ThreadedVectorEnv(BatchedVectorEnv):
       num_threads: threads stepping sub-environments, the calling one included (at most
         one per sub-environment); None for one per CPU core.
       autoreset_mode: an `AutoresetMode` (or its value); NEXT_STEP by default.
-      copy: return copies of the observation arrays (see `BatchedVectorEnv`).
+      copy: return copies of the observation arrays (see `SubEnvVectorEnv`).
 
     Raises:
       ValueError: for no `env_fns`, `num_threads` < 1, or sub-environments whose spaces

@@ -31,7 +31,7 @@ import gymnasium
 import numpy as np
 from gymnasium.vector import AutoresetMode
 
-from composer.gym.batched import BatchedVectorEnv, SubEnvironmentError
+from composer.gym.sub_env_vector import SubEnvironmentError, SubEnvVectorEnv
 from composer.rl import _sub_env
 
 try:
@@ -91,12 +91,12 @@ class Sb3VecEnv(VecEnv):
         makes one for a registered composer id; `make_vec_env` does it all.
 
     Raises:
-      TypeError: if `vector_env` is not a `composer.gym.BatchedVectorEnv`.
+      TypeError: if `vector_env` is not a `composer.gym.SubEnvVectorEnv`.
       ValueError: if its autoreset mode is not SAME_STEP, or it does not copy.
     """
 
-    def __init__(self, vector_env: BatchedVectorEnv):
-        if not isinstance(vector_env, BatchedVectorEnv):
+    def __init__(self, vector_env: SubEnvVectorEnv):
+        if not isinstance(vector_env, SubEnvVectorEnv):
             raise TypeError(
                 "vector_env: expected a composer.gym.ThreadedVectorEnv or RayVectorEnv, got "
                 f"{type(vector_env).__name__}"

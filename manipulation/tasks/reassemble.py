@@ -2,17 +2,15 @@
 
 import numpy as np
 
-from composer.observation import observable
-from composer.utils import rewards
 from composer.variation import distributions
 from manipulation.props import Duplo2x4
-from manipulation.tasks import base, bricks, registry
+from manipulation.tasks import base, registry
 from manipulation.tasks import task_constants as tc
+from manipulation.tasks.brick_tower import BrickTowerTask
 from manipulation.tasks.observation_settings import ObservationSettings
-from manipulation.tasks.seating import SeatErrors
 
 
-class Reassemble(base.ManipulationTask):
+class Reassemble(BrickTowerTask):
     """Rebuild a tower of free bricks so that it reads, bottom to top, a desired order.
 
     Every episode starts with all bricks stacked into one tower at a random place and yaw
@@ -37,32 +35,17 @@ class Reassemble(base.ManipulationTask):
     def __init__(self, obs_settings: ObservationSettings, num_bricks: int, random_order: bool):
         if num_bricks < 2:
             raise ValueError(f"Reassemble: num_bricks must be at least 2, got {num_bricks}")
-        super().__init__(obs_settings)
-        self._bricks = bricks.make_bricks(num_bricks)
+        self._initial_order = np.arange(num_bricks)
+        super().__init__(obs_settings, num_bricks, self._initial_order[::-1].copy())
         for brick in self._bricks:
             self.arena.add_free_entity(brick)
             self._enable_features(brick)
         self._random_order = random_order
-        self._initial_order = np.arange(num_bricks)
-        self._desired_order = self._initial_order[::-1].copy()
         if random_order:
-            self._add_feature_observable(
-                "desired_order",
-                observable.Generic(lambda physics: self._desired_order.astype(float)),
-            )
+            self._observe_desired_order()
         (x0, y0), (x1, y1) = tc.PROP_XY_BOUNDS
         self._tower_position = distributions.Uniform((x0, y0), (x1, y1))
         self._tower_yaw = base.random_yaw()
-        self._seat_errors = None
-
-    @property
-    def bricks(self) -> list:
-        return list(self._bricks)
-
-    @property
-    def desired_order(self) -> np.ndarray:
-        """Indices of the bricks of the tower to build, bottom first, for this episode."""
-        return self._desired_order.copy()
 
     def initialize_episode(self, physics, random_state) -> None:
         super().initialize_episode(physics, random_state)
@@ -77,20 +60,10 @@ class Reassemble(base.ManipulationTask):
         for level, index in enumerate(self._initial_order):
             height = level * Duplo2x4.HEIGHT + tc.PROP_DROP_HEIGHT
             self._bricks[index].set_pose(physics, position=(x, y, height), quaternion=quaternion)
-        tower = [self._bricks[i] for i in self._desired_order]
-        self._seat_errors = SeatErrors(physics, list(zip(tower[:-1], tower[1:])))
+        self._build_tower(physics)
 
     def get_reward(self, physics) -> float:
-        seated = [
-            rewards.tolerance(
-                error,
-                bounds=(0.0, tc.SEAT_TOLERANCE),
-                margin=tc.REASSEMBLE_MARGIN,
-                sigmoid="gaussian",
-            )
-            for error in self._seat_errors()
-        ]
-        return sum(seated) / len(seated)
+        return self._seated_fraction(tc.REASSEMBLE_MARGIN)
 
 
 def reassemble_3_bricks_fixed_order(obs_settings: ObservationSettings) -> Reassemble:

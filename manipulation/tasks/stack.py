@@ -3,17 +3,15 @@
 import numpy as np
 
 from composer import initializers
-from composer.observation import observable
-from composer.utils import rewards
-from manipulation.tasks import base, bricks, registry
+from manipulation.tasks import base, registry
 from manipulation.tasks import task_constants as tc
+from manipulation.tasks.brick_tower import BrickTowerTask
 from manipulation.tasks.observation_settings import ObservationSettings
-from manipulation.tasks.seating import SeatErrors
 
 _MAX_PLACEMENT_ATTEMPTS = 50
 
 
-class Stack(base.ManipulationTask):
+class Stack(BrickTowerTask):
     """Stack bricks lying on the table into a tower, bottom to top in a desired order.
 
     Every brick lies at a random place and yaw. Without `random_order` the tower is
@@ -54,8 +52,7 @@ class Stack(base.ManipulationTask):
             )
         if fixed_base and random_order:
             raise ValueError("Stack: fixed_base cannot be combined with random_order")
-        super().__init__(obs_settings)
-        self._bricks = bricks.make_bricks(num_bricks)
+        super().__init__(obs_settings, num_bricks, np.arange(num_to_stack))
         for index, brick in enumerate(self._bricks):
             if index == 0 and fixed_base:
                 self.arena.attach(brick)
@@ -65,28 +62,14 @@ class Stack(base.ManipulationTask):
         self._watch_touches(self._bricks)
         self._random_order = random_order
         self._num_to_stack = num_to_stack
-        self._desired_order = np.arange(num_to_stack)
         if random_order:
-            self._add_feature_observable(
-                "desired_order",
-                observable.Generic(lambda physics: self._desired_order.astype(float)),
-            )
+            self._observe_desired_order()
         self._placer = initializers.PropPlacer(
             self._bricks,
             position=base.table_positions(0.0),
             quaternion=base.random_yaw(),
             max_attempts_per_prop=_MAX_PLACEMENT_ATTEMPTS,
         )
-        self._seat_errors = None
-
-    @property
-    def bricks(self) -> list:
-        return list(self._bricks)
-
-    @property
-    def desired_order(self) -> np.ndarray:
-        """Indices of the tower's bricks, bottom first, for the current episode."""
-        return self._desired_order.copy()
 
     def initialize_episode(self, physics, random_state) -> None:
         super().initialize_episode(physics, random_state)
@@ -94,17 +77,10 @@ class Stack(base.ManipulationTask):
         if self._random_order:
             chosen = random_state.permutation(len(self._bricks))[: self._num_to_stack]
             self._desired_order = chosen
-        tower = [self._bricks[i] for i in self._desired_order]
-        self._seat_errors = SeatErrors(physics, list(zip(tower[:-1], tower[1:])))
+        self._build_tower(physics)
 
     def get_reward(self, physics) -> float:
-        seated = [
-            rewards.tolerance(
-                error, bounds=(0.0, tc.SEAT_TOLERANCE), margin=tc.PLACE_MARGIN, sigmoid="gaussian"
-            )
-            for error in self._seat_errors()
-        ]
-        reward = sum(seated) / len(seated)
+        reward = self._seated_fraction(tc.PLACE_MARGIN)
         if self._hand_touches():
             return tc.HELD_FACTOR * reward
         return reward

@@ -393,6 +393,7 @@ class _ImageObservable(Observable):
 
     def __init__(
         self,
+        *,
         height,
         width,
         update_interval,
@@ -525,17 +526,17 @@ class MujocoCamera(_ImageObservable):
     ):
         self._camera_name = camera_name
         super().__init__(
-            height,
-            width,
-            update_interval,
-            buffer_size,
-            delay,
-            aggregator,
-            corruptor,
-            depth,
-            segmentation,
-            scene_option,
-            render_flag_overrides,
+            height=height,
+            width=width,
+            update_interval=update_interval,
+            buffer_size=buffer_size,
+            delay=delay,
+            aggregator=aggregator,
+            corruptor=corruptor,
+            depth=depth,
+            segmentation=segmentation,
+            scene_option=scene_option,
+            render_flag_overrides=render_flag_overrides,
         )
 
     def _callable(self, physics):

@@ -110,17 +110,17 @@ class MJCFCamera(base._ImageObservable):
             raise ValueError(f"MJCFCamera: expected a <camera> element, got <{mjcf_element.tag}>")
         self._mjcf_element = mjcf_element
         super().__init__(
-            height,
-            width,
-            update_interval,
-            buffer_size,
-            delay,
-            aggregator,
-            corruptor,
-            depth,
-            segmentation,
-            scene_option,
-            render_flag_overrides,
+            height=height,
+            width=width,
+            update_interval=update_interval,
+            buffer_size=buffer_size,
+            delay=delay,
+            aggregator=aggregator,
+            corruptor=corruptor,
+            depth=depth,
+            segmentation=segmentation,
+            scene_option=scene_option,
+            render_flag_overrides=render_flag_overrides,
         )
 
     @property

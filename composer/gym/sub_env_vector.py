@@ -1,6 +1,6 @@
 """What every vector env of this package shares: batching, seeding and autoreset.
 
-`BatchedVectorEnv` is a `gymnasium.vector.VectorEnv` that keeps the batched outputs in
+`SubEnvVectorEnv` is a `gymnasium.vector.VectorEnv` that keeps the batched outputs in
 preallocated arrays and implements Gymnasium's autoreset modes; a subclass says only
 where the sub-environments live and how a function reaches them (`_map`). The functions
 that run next to a sub-environment (`reset_sub_env`, `step_sub_env`, `call_sub_env`) are
@@ -29,7 +29,7 @@ from gymnasium.vector import AutoresetMode, VectorEnv
 from gymnasium.vector.utils import batch_space, create_empty_array, iterate
 
 __all__ = [
-    "BatchedVectorEnv",
+    "SubEnvVectorEnv",
     "SubEnvOutcome",
     "SubEnvironmentError",
     "call_sub_env",
@@ -173,7 +173,7 @@ def _row_writer(batch) -> Callable[[int, Any], None]:
     return batch.__setitem__
 
 
-class BatchedVectorEnv(VectorEnv):
+class SubEnvVectorEnv(VectorEnv):
     """A `VectorEnv` of `num_envs` sub-environments reached through `_map`.
 
     `reset(seed=s)` seeds sub-environment i with `s + i` (or `s[i]` for a list);
