@@ -186,8 +186,7 @@ def measure(
     """
     model, data = physics.model.ptr, physics.data.ptr
     compiled = model_arrays(model)
-    saved_data = mujoco.MjData(model)
-    mujoco.mj_copyData(saved_data, model, data)
+    restore_data = _saved_data(model, data)
     probes = []
     try:
         for seed in PROBE_SEEDS:
@@ -199,13 +198,32 @@ def measure(
             probes.append(model_arrays(model))
     finally:
         _write_arrays(model, compiled)
-        mujoco.mj_copyData(data, model, saved_data)
+        restore_data()
     origins = _compiled_field_origins(episode_model.changes)
     first, second = probes
     for name, value in first.items():
         if not np.array_equal(value, second[name], equal_nan=True):
             origins.setdefault(name, "initialize_episode")
     return origins
+
+
+def _saved_data(model: mujoco.MjModel, data: mujoco.MjData):
+    """Saves `data`; returns a function that puts it back as it was."""
+    if hasattr(mujoco, "mj_copyData"):
+        saved = mujoco.MjData(model)
+        mujoco.mj_copyData(saved, model, data)
+        return lambda: mujoco.mj_copyData(data, model, saved)
+    # Bindings without mj_copyData (mujoco 3.3): the full physics state, and a forward to
+    # recompute what derives from it (the data was forwarded when it was saved).
+    spec = mujoco.mjtState.mjSTATE_INTEGRATION
+    state = np.empty(mujoco.mj_stateSize(model, spec))
+    mujoco.mj_getState(model, data, state, spec)
+
+    def restore() -> None:
+        mujoco.mj_setState(model, data, state, spec)
+        mujoco.mj_forward(model, data)
+
+    return restore
 
 
 def _write_arrays(model: mujoco.MjModel, arrays: Mapping[str, np.ndarray]) -> None:
