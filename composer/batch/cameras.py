@@ -23,6 +23,7 @@ import dataclasses
 from collections.abc import Callable, Mapping
 from typing import Any
 
+import mujoco
 import numpy as np
 
 from composer.batch import _warp
@@ -31,9 +32,6 @@ from composer.observation.observable.mjcf import MJCFCamera
 
 __all__ = ["BatchCameras"]
 
-# The geom groups MuJoCo's default visual options show (`mjvOption.geomgroup`), which the
-# CPU camera observables render.
-_VISIBLE_GEOM_GROUPS = [0, 1, 2]
 _DTYPES = {"rgb": np.uint8, "depth": np.float32, "segmentation": np.int32}
 
 
@@ -46,6 +44,12 @@ class _CameraImage:
     height: int
     width: int
     kind: str  # "rgb", "depth" or "segmentation"
+
+
+def _visible_geom_groups() -> list[int]:
+    """The geom groups MuJoCo's default visual options show (`mjvOption.geomgroup`), which
+    the CPU camera observables render."""
+    return [group for group, shown in enumerate(mujoco.MjvOption().geomgroup) if shown]
 
 
 def _kind(observable: MJCFCamera) -> str:
@@ -117,7 +121,7 @@ class BatchCameras:
                 render_rgb=kinds["rgb"],
                 render_depth=kinds["depth"],
                 render_seg=kinds["segmentation"],
-                enabled_geom_groups=_VISIBLE_GEOM_GROUPS,
+                enabled_geom_groups=_visible_geom_groups(),
                 cam_active=cameras,
             )
             self._outputs = {image.name: self._output(image) for image in self._images}
