@@ -20,6 +20,7 @@ Usage: python benchmarks/batch_cameras.py [--device cpu|cuda:0] [--num-envs 16,6
 """
 
 import argparse
+import importlib.util
 import os
 import pathlib
 import sys
@@ -34,7 +35,6 @@ sys.path = [entry for entry in sys.path if pathlib.Path(entry or ".").resolve() 
 os.environ.setdefault("COMPOSER_WARP_KERNEL_CACHE", str(_REPOSITORY / ".cache" / "warp"))
 os.environ.setdefault("MUJOCO_GL", "egl")
 
-import gymnasium  # noqa: E402
 
 import manipulation  # noqa: E402
 from composer.batch import BatchEnvironment, _warp, arrays  # noqa: E402
@@ -102,22 +102,12 @@ def _batch_steps(task: str, num_envs: int, device: str, steps: int) -> float:
         env.close()
 
 
-def _threaded_steps(task: str, seconds: float) -> tuple[int, float]:
-    cores = os.cpu_count() or 1
-    env = gymnasium.make_vec(
-        f"composer/{task}-v0", num_envs=cores, vectorization_mode="vector_entry_point"
-    )
-    env.reset(seed=0)
-    action = np.zeros(env.action_space.shape)
-    try:
-        env.step(action)
-        begin, calls = time.perf_counter(), 0
-        while time.perf_counter() - begin < seconds:
-            env.step(action)
-            calls += 1
-        return cores, calls * cores / (time.perf_counter() - begin)
-    finally:
-        env.close()
+def _batch_env():
+    """benchmarks/batch_env.py as a module (this folder is not on sys.path, see above)."""
+    spec = importlib.util.spec_from_file_location("batch_env", _HERE / "batch_env.py")
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module
 
 
 def main() -> None:
@@ -145,7 +135,10 @@ def main() -> None:
         return
     threaded = None
     if not args.no_threaded:
-        cores, threaded = _threaded_steps(args.task, args.seconds)
+        cores, threaded = (
+            os.cpu_count() or 1,
+            _batch_env().threaded_cpu_steps(args.task, args.seconds),
+        )
         print(f"threaded CPU vision env, {cores} sub-environments: {threaded:.0f} steps/s")
     print(f"{'num_envs':>8} {'batch steps/s':>14} {'batch/threaded':>15}")
     for n in sizes:

@@ -250,7 +250,9 @@ def _producer_rate(task: str, workers: int, processes: bool, states: int) -> flo
         producer.close()
 
 
-def _threaded_cpu(task: str, seconds: float) -> float:
+def threaded_cpu_steps(task: str, seconds: float) -> float:
+    """Environment steps/s of `task`'s threaded CPU vector env, one sub-env per core, zero
+    actions, over `seconds` (batch_cameras.py reuses it)."""
     cores = os.cpu_count() or 1
     env = gymnasium.make_vec(
         f"composer/{task}-v0", num_envs=cores, vectorization_mode="vector_entry_point"
@@ -423,7 +425,7 @@ def main() -> None:
     if args.baselines:
         print()
         for task in tasks:
-            threaded = _threaded_cpu(task, 3.0)
+            threaded = threaded_cpu_steps(task, 3.0)
             ceiling = _mj_step_ceiling(task, 3.0)
             print(f"{task}: threaded CPU vector env ({os.cpu_count()} sub-envs) {threaded:.0f}/s")
             print(f"{task}: mj_step ceiling ({os.cpu_count()} threads, free) {ceiling:.0f}/s")

@@ -169,9 +169,12 @@ class ArrayBridge:
         return self._wp.to_jax(array) if kind == "jax" else array
 
     def to_host(self, values) -> np.ndarray:
-        """An `xp` array as a NumPy array (a device-to-host copy on CUDA)."""
-        if self.library == "torch":
+        """An array of any namespace (torch, JAX, Warp, NumPy, or anything NumPy reads) as a
+        NumPy array: a device-to-host copy for one on CUDA."""
+        if hasattr(values, "detach") and hasattr(values, "cpu"):  # torch
             return values.detach().cpu().numpy()
+        if hasattr(values, "numpy"):  # Warp
+            return values.numpy()
         return np.asarray(values)
 
 

@@ -364,7 +364,7 @@ class BatchEnvironment:
 
     @episode_steps.setter
     def episode_steps(self, steps) -> None:
-        values = np.asarray(_to_host(steps))
+        values = self._arrays.to_host(steps)
         if values.shape != (self.num_envs,) or not np.issubdtype(values.dtype, np.integer):
             raise ValueError(
                 f"episode_steps: expected integers of shape ({self.num_envs},), got "
@@ -523,13 +523,6 @@ class BatchEnvironment:
         """Stops the initial-state producers."""
         if self._slots is not None:
             self._slots.close()
-
-
-def _to_host(values):
-    """A torch, JAX or Warp array (or anything NumPy reads) as host values."""
-    if hasattr(values, "numpy") and hasattr(values, "cpu"):  # torch
-        return values.detach().cpu().numpy()
-    return values.numpy() if hasattr(values, "numpy") else values
 
 
 def _rows(xp, mask, like):
