@@ -118,8 +118,9 @@ def element_namespace(element) -> str | None:
     return element.spec.namespace
 
 
-class _Field:
-    """Class-level accessor of one binding attribute (a non-data descriptor)."""
+class _BoundFieldAccessor:
+    """Reads one field of a binding's elements: the class-level (non-data) descriptor of a
+    binding attribute such as `xpos`, made once per object family."""
 
     __slots__ = ("name",)
 
@@ -520,7 +521,9 @@ def _binding_class(family: Family) -> type:
     """The Binding subclass with one class-level accessor per attribute of `family`."""
     cls = _BINDING_CLASSES.get(family.namespace)
     if cls is None:
-        accessors = {name: _Field(name) for name in family.fields if not hasattr(Binding, name)}
+        accessors = {
+            name: _BoundFieldAccessor(name) for name in family.fields if not hasattr(Binding, name)
+        }
         cls = type(f"{family.namespace.title()}Binding", (Binding,), accessors)
         _BINDING_CLASSES[family.namespace] = cls
     return cls

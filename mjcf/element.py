@@ -112,6 +112,10 @@ class Element:
     # Attributes that `is_same_as` ignores.
     _UNCOMPARED_ATTRIBUTES: frozenset[str] = frozenset()
 
+    # Whether this is the body an attached model hangs from (`AttachmentFrame` says True):
+    # a class attribute, so that writers tell frames apart without a call per element.
+    _is_attachment_frame: bool = False
+
     def __init__(self, *args, **kwargs):
         raise TypeError(
             "mjcf.Element cannot be created directly: use parent.add(tag, ...) or "
@@ -121,17 +125,23 @@ class Element:
     @classmethod
     def _create(cls, spec: schema.ElementSpec, parent: Element | None, root: RootElement):
         element = object.__new__(cls)
-        _set_slot(element, "_spec", spec)
-        _set_slot(element, "_parent", parent)
-        _set_slot(element, "_root", root)
-        _set_slot(element, "_attributes", {})
-        _set_slot(element, "_texts", {})
-        _set_slot(element, "_children", [])
-        _set_slot(element, "_xml_cache", None)
-        _set_slot(element, "_text_cache", None)
-        _set_slot(element, "_auto_id", None)
-        _set_slot(element, "_removed", False)
+        element._init_slots(spec, parent, root)
         return element
+
+    def _init_slots(
+        self, spec: schema.ElementSpec, parent: Element | None, root: RootElement
+    ) -> None:
+        """Sets every slot of `Element` for a new, empty element of kind `spec`."""
+        _set_slot(self, "_spec", spec)
+        _set_slot(self, "_parent", parent)
+        _set_slot(self, "_root", root)
+        _set_slot(self, "_attributes", {})
+        _set_slot(self, "_texts", {})
+        _set_slot(self, "_children", [])
+        _set_slot(self, "_xml_cache", None)
+        _set_slot(self, "_text_cache", None)
+        _set_slot(self, "_auto_id", None)
+        _set_slot(self, "_removed", False)
 
     # ----------------------------------------------------------------- basic properties
 
@@ -940,6 +950,8 @@ class AttachmentFrame(Element):
 
     __slots__ = ("_attached",)
 
+    _is_attachment_frame = True
+
     @property
     def attached_model(self) -> RootElement:
         return self._attached
@@ -1046,16 +1058,7 @@ class RootElement(Element):
     _UNCOMPARED_ATTRIBUTES = frozenset(("model",))
 
     def __init__(self, model: str | None = None, model_dir: str = "", assets: dict | None = None):
-        self._spec = schema.root_spec()
-        self._parent = None
-        self._root = self
-        self._attributes = {}
-        self._texts = {}
-        self._children = []
-        self._xml_cache = None
-        self._text_cache = None
-        self._auto_id = None
-        self._removed = False
+        self._init_slots(schema.root_spec(), None, self)
         self._namescope = NameScope(self, model_dir, assets)
         self._frame = None
         self._frames = []

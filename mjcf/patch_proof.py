@@ -4,15 +4,15 @@ Usage: `python -m mjcf.patch_proof [--write] [--extra-models DIR]` (about half a
 
 For every candidate (tag, attribute) pair (a float attribute of an element that compiles to
 a MuJoCo object, whose binding field of the same name is an MjModel array) and every model
-of the corpus that has it (the 25 manipulation tasks' models and the scenes below), it
-changes the attribute's value, once on an element once on a default-class template, and once
-where nothing set it before (MuJoCo's built-in default applied), as far as the model has
-such elements, then patches a copy of the compiled model with `mjcf.model_patch`,
-recompiles the changed model, and requires every MjModel array (and the `stat` struct) to be
-bit-identical (and its sizes), and every MjData array after `mj_forward` from the same
-state. A pair is
-proven when every change of it in the corpus passed, by a plain write or, failing that, by a
-write followed by `mj_setConst`.
+of the corpus that has it (the 25 manipulation tasks' models and the scenes in
+`mjcf/patch_proof_scenes/`), it changes the attribute's value, once on an element once on a
+default-class template, and once where nothing set it before (MuJoCo's built-in default
+applied), as far as the model has such elements, then patches a copy of the compiled model
+with `mjcf.model_patch`, recompiles the changed model, and requires every MjModel array
+(the name and text buffers too), size and struct (`opt`, `vis`, `stat`) to be bit-identical,
+and every MjData array after `mj_forward` from the same state. A pair is proven when every
+change of it in the corpus passed, by a plain write or, failing that, by a write followed by
+`mj_setConst`.
 
 Prints one line per pair: how it patches, or why it recompiles (the fields that differ).
 On the MuJoCo release the checked-in table `mjcf/patchable_attributes.py` was proven on, it
@@ -30,6 +30,7 @@ from __future__ import annotations
 import argparse
 import copy
 import dataclasses
+import importlib.resources
 import pprint
 import sys
 import time
@@ -49,163 +50,27 @@ from mjcf import (
 )
 from mjcf.element import Element
 from mjcf.physics import compile_mjcf_model
-from mujoco_physics.field_layout import FAMILIES, MODEL
+from mujoco_physics.field_layout import DATA_FIELDS, FAMILIES, MODEL, MODEL_FIELDS
 
 _NOT_IN_CORPUS = "no model of the corpus has it"
 # How many forwards of copies of a model tell its scratch arrays (see `_scratch_arrays`).
 _SCRATCH_RUNS = 6
 _TABLE = Path(patchable_attributes.__file__)
 
-# Scenes besides the manipulation tasks: degree and radian angles, a joint whose stiffness
-# and damping come from `springdamper`, every primitive geom type, bodies
-# whose mass comes from geoms and bodies with explicit inertia, tendons, actuators of
-# several kinds, equality constraints, lights, cameras, materials and default classes.
-_SCENES = {
-    "creature (degree)": """
-<mujoco>
-  <default>
-    <joint damping="0.1" range="-30 30"/>
-    <default class="knee">
-      <joint range="0 70" armature="0.02"/>
-    </default>
-  </default>
-  <worldbody>
-    <light pos="0 0 3" dir="0 0.3 -1"/>
-    <geom name="floor" type="plane" size="3 3 0.1" friction="1 0.005 0.0001"/>
-    <body name="torso" pos="0 0 0.5" euler="0 0 30">
-      <freejoint/>
-      <geom name="torso" type="sphere" size="0.1" rgba="0.8 0.6 0.4 1"/>
-      <body name="tail" pos="-0.1 0 0">
-        <joint name="tail" axis="0 1 0" springdamper="0.2 0.7" damping="0.3" stiffness="2"/>
-        <geom type="capsule" fromto="0 0 0 -0.2 0 0" size="0.02"/>
-      </body>
-      <body name="thigh" pos="0.1 0 0">
-        <joint name="hip" axis="0 0 1" range="-40 40" stiffness="1"/>
-        <geom type="capsule" fromto="0 0 0 0.2 0 0" size="0.03"/>
-        <body name="shin" pos="0.2 0 0">
-          <joint name="knee" class="knee" axis="0 1 0" frictionloss="0.01"/>
-          <geom type="capsule" fromto="0 0 0 0.3 0 -0.3" size="0.03"/>
-        </body>
-      </body>
-    </body>
-  </worldbody>
-  <actuator>
-    <motor joint="hip" gear="10" ctrlrange="-1 1"/>
-    <position joint="knee" kp="5" ctrlrange="0 1"/>
-  </actuator>
-</mujoco>
-""",
-    "primitives (radian)": """
-<mujoco>
-  <compiler angle="radian"/>
-  <option timestep="0.002"/>
-  <default>
-    <geom friction="0.8 0.01 0.001" rgba="0.5 0.5 0.5 1" density="900" solref="0.02 1"/>
-    <joint damping="0.3" armature="0.01" stiffness="0.5"/>
-    <site size="0.02"/>
-    <default class="limb">
-      <geom size="0.04 0.2" type="capsule" margin="0.001"/>
-      <joint range="-1 1" frictionloss="0.02"/>
-    </default>
-  </default>
-  <asset>
-    <material name="shiny" rgba="0.2 0.3 0.4 1" specular="0.4" shininess="0.6"/>
-  </asset>
-  <worldbody>
-    <light pos="0 0 3" dir="0 0 -1" diffuse="0.7 0.7 0.7"/>
-    <camera name="side" pos="0 -3 1" xyaxes="1 0 0 0 0.3 1" fovy="50"/>
-    <geom name="floor" type="plane" size="3 3 0.1" material="shiny"/>
-    <body name="ball" pos="0 0 1">
-      <freejoint/>
-      <geom name="ball" type="sphere" size="0.1" mass="0.5"/>
-      <site name="ball_top" pos="0 0 0.1"/>
-    </body>
-    <body name="crate" pos="0.5 0 0.5">
-      <joint name="slide" type="slide" axis="1 0 0" range="-0.5 0.5"/>
-      <geom name="crate" type="box" size="0.1 0.15 0.05"/>
-      <geom name="lid" type="ellipsoid" pos="0 0 0.06" size="0.1 0.1 0.02"/>
-    </body>
-    <body name="arm" pos="-0.5 0 0.8" childclass="limb">
-      <inertial pos="0 0 -0.1" mass="1.2" diaginertia="0.01 0.01 0.002"/>
-      <joint name="shoulder" axis="0 1 0"/>
-      <geom name="upper" fromto="0 0 0 0 0 -0.3"/>
-      <body name="forearm" pos="0 0 -0.3">
-        <joint name="elbow" axis="0 1 0" range="-2 0.5"/>
-        <geom name="forearm" type="cylinder" size="0.03 0.12" pos="0 0 -0.12"/>
-        <site name="hand" pos="0 0 -0.25"/>
-      </body>
-    </body>
-  </worldbody>
-  <tendon>
-    <fixed name="coupling" stiffness="2" damping="0.1">
-      <joint joint="shoulder" coef="1"/>
-      <joint joint="elbow" coef="-0.5"/>
-    </fixed>
-    <spatial name="cord" width="0.005" rgba="1 1 0 1">
-      <site site="ball_top"/>
-      <site site="hand"/>
-    </spatial>
-  </tendon>
-  <equality>
-    <joint joint1="shoulder" joint2="elbow" polycoef="0 0.5 0 0 0" solref="0.05 1"/>
-  </equality>
-  <actuator>
-    <motor name="shoulder" joint="shoulder" gear="2" ctrlrange="-1 1"/>
-    <position name="elbow" joint="elbow" kp="20" ctrlrange="-1 1"/>
-    <general name="slide" joint="slide" gainprm="5" biasprm="0 -1 0" forcerange="-3 3"/>
-  </actuator>
-  <sensor>
-    <jointpos joint="shoulder" noise="0.01"/>
-    <framepos objtype="site" objname="hand"/>
-  </sensor>
-</mujoco>
-""",
-    # A toy building block whose mass and inertia come from its geoms: a hollow shell of
-    # boxes, knobs on top from a default class (a cylinder size that several geoms use),
-    # massless collision helpers and a tube of another density; then a body with an
-    # explicit inertial. Shell inertia, inertia groups and a mass bound besides.
-    "blocks (geom sizes)": """
-<mujoco>
-  <compiler boundmass="0.0001" inertiagrouprange="0 4"/>
-  <default>
-    <geom density="700"/>
-    <default class="knob">
-      <geom type="cylinder" size="0.006 0.003" density="450" margin="0.0002"/>
-    </default>
-    <default class="knob_helper">
-      <geom type="capsule" size="0.004 0.002" mass="0" group="5"/>
-    </default>
-  </default>
-  <worldbody>
-    <geom name="ground" type="plane" size="1 1 0.1"/>
-    <body name="block" pos="0 0 0.1">
-      <freejoint/>
-      <geom name="top" type="box" size="0.016 0.008 0.001" pos="0 0 0.009" mass="0"/>
-      <geom name="side_a" type="box" size="0.016 0.001 0.009" pos="0 0.007 0"/>
-      <geom name="side_b" type="box" size="0.016 0.001 0.009" pos="0 -0.007 0"/>
-      <geom name="end_a" type="box" size="0.001 0.008 0.009" pos="0.015 0 0"/>
-      <geom name="end_b" type="box" size="0.001 0.008 0.009" pos="-0.015 0 0"/>
-      <geom name="knob_1" class="knob" pos="0.008 0.004 0.012"/>
-      <geom name="knob_2" class="knob" pos="-0.008 0.004 0.012"/>
-      <geom name="knob_3" class="knob" pos="0.008 -0.004 0.012"/>
-      <geom name="knob_4" class="knob" pos="-0.008 -0.004 0.012"/>
-      <geom name="helper_1" class="knob_helper" pos="0.008 0.004 0.013" euler="0 90 0"/>
-      <geom name="helper_2" class="knob_helper" pos="-0.008 0.004 0.013" euler="0 90 0"/>
-      <geom name="tube" type="cylinder" size="0.003 0.008" density="300"/>
-      <geom name="bead" type="ellipsoid" size="0.002 0.003 0.004" pos="0 0 -0.004"/>
-      <geom name="pip" type="sphere" size="0.002" pos="0.01 0 -0.004" shellinertia="true"/>
-    </body>
-    <body name="weighted" pos="0.1 0 0.1">
-      <joint name="hinge" axis="0 1 0"/>
-      <inertial pos="0 0 0.01" mass="0.3" diaginertia="0.001 0.001 0.0005"/>
-      <geom name="weight_box" type="box" size="0.02 0.02 0.01"/>
-      <geom name="weight_knob" class="knob" pos="0 0 0.012"/>
-      <geom name="rod" type="capsule" fromto="0 0 0 0 0 0.05" size="0.004"/>
-    </body>
-  </worldbody>
-</mujoco>
-""",
-}
+# Scenes besides the manipulation tasks, one MJCF file each (each says what it covers):
+# degree and radian angles, every primitive geom type, masses from geoms and explicit
+# inertia, tendons, actuators, equality constraints, lights, cameras, materials, classes.
+_SCENE_FOLDER = "patch_proof_scenes"
+
+
+def _scenes() -> dict[str, str]:
+    """The proof's own scenes, shipped with the package: file name -> MJCF text."""
+    folder = importlib.resources.files("mjcf") / _SCENE_FOLDER
+    files = sorted(
+        (entry for entry in folder.iterdir() if entry.name.endswith(".xml")),
+        key=lambda entry: entry.name,
+    )
+    return {entry.name: entry.read_text(encoding="utf-8") for entry in files}
 
 
 @dataclasses.dataclass
@@ -254,7 +119,7 @@ def _corpus(extra_models: Path | None = None):
         if xml not in seen:
             seen.add(xml)
             yield name, root
-    for label, xml in _SCENES.items():
+    for label, xml in _scenes().items():
         yield label, mjcf.from_xml_string(xml)
     for path in sorted(extra_models.glob("*.xml")) if extra_models else ():
         try:
@@ -351,15 +216,11 @@ def _current_value(root, base, element, name: str):
 
 
 def _model_arrays(model: mujoco.MjModel) -> dict[str, bytes]:
-    """Every array and size (`ngravcomp`, ...) of `model`, and its structs' fields, as bytes."""
-    arrays = {}
-    for name in dir(model):
-        if name.startswith("_"):
-            continue
-        value = getattr(model, name)
-        if isinstance(value, (np.ndarray, int)):
-            arrays[name] = np.asarray(value).tobytes()
-    for struct in ("opt", "stat", "vis"):
+    """Every array (of numbers or characters) and size (`ngravcomp`, ...) of `model`, and
+    its structs' fields, as bytes."""
+    fields = MODEL_FIELDS.arrays + MODEL_FIELDS.texts + MODEL_FIELDS.scalars
+    arrays = {name: np.asarray(getattr(model, name)).tobytes() for name in fields}
+    for struct in MODEL_FIELDS.structs:
         arrays.update(_struct_bytes(struct, getattr(model, struct)))
     return arrays
 
@@ -382,11 +243,7 @@ def _data_arrays(model: mujoco.MjModel, data: mujoco.MjData) -> dict[str, bytes]
     """MjData arrays after a reset and `mj_forward`."""
     mujoco.mj_resetData(model, data)
     mujoco.mj_forward(model, data)
-    return {
-        name: value.tobytes()
-        for name in dir(data)
-        if not name.startswith("_") and isinstance(value := getattr(data, name), np.ndarray)
-    }
+    return {name: getattr(data, name).tobytes() for name in DATA_FIELDS.arrays}
 
 
 def _scratch_arrays(model: mujoco.MjModel) -> frozenset[str]:

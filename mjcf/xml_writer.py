@@ -267,7 +267,7 @@ class _Writer:
         """
         stamp = self.stamp
         # An attachment frame's text is kept by `kept` (see `fresh_element`), not here.
-        if stamp is not None and type(element) is not AttachmentFrame:
+        if stamp is not None and not element._is_attachment_frame:
             text = element._text_cache
             if (
                 text is not None
@@ -300,7 +300,7 @@ class _Writer:
         the file assets met are gathered into `self.assets`, so that a first compile walks
         the model once. This runs once per element of a new model: keep it lean.
         """
-        if type(element) is AttachmentFrame:
+        if element._is_attachment_frame:
             self.kept(element, depth, prefix, dclass, self.frame, element, depth, dclass)
             return
         spec = element._spec
@@ -323,7 +323,7 @@ class _Writer:
             identifier = attributes.get("name")
             if identifier is not None:
                 scoped -= 1
-                if type(element._parent) is AttachmentFrame:
+                if element._parent._is_attachment_frame:
                     name_text = f' name="{_escape(element._scoped_name(prefix))}"'
                 else:
                     name_text = f' name="{_escape(prefix + identifier)}"'
@@ -344,7 +344,7 @@ class _Writer:
             else:
                 auto_id = element._auto_id or element._unnamed_id()
                 name_text = f' name="{prefix or _SEP}{auto_id}"'
-        if name_text and type(element._parent) is not AttachmentFrame:
+        if name_text and not element._parent._is_attachment_frame:
             head = f"<{tag}{name_text}"
             name_text = ""
         else:
@@ -801,7 +801,7 @@ def short_string(element: Element, prefix_root=None) -> str:
     if isinstance(element, RootElement):
         name = element._attributes.get("model")
         head = f'<mujoco model="{_escape(name)}"' if name is not None else "<mujoco"
-    elif type(element) is AttachmentFrame:
+    elif element._is_attachment_frame:
         static = writer.static_text(element)
         head = f'<body{static} name="{_escape(element.prefixed_identifier(element._root))}"'
     elif tag == constants.DEFAULT:

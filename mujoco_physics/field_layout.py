@@ -6,6 +6,10 @@ extent is an object count (`ngeom`, `njnt`, ...) has one row per object of that 
 arrays sized by `nq`, `nv`, `nsensordata`, `na`, ... are addressed through the
 per-object start/width arrays listed in `_ADDRESSING`. A field MuJoCo adds in a new release
 is picked up without a change here.
+
+`MODEL_FIELDS` and `DATA_FIELDS` list, from the same source, every field the bindings
+expose on MjModel and MjData by kind (arrays of numbers, of characters, single numbers,
+nested structs): code that walks a whole model or data reads them instead of `dir()`.
 """
 
 import dataclasses
@@ -130,6 +134,61 @@ def _array_extents(struct_name: str, python_type: type) -> dict:
 MODEL_EXTENTS = _array_extents("mjModel", mujoco.MjModel)
 DATA_EXTENTS = _array_extents("mjData", mujoco.MjData)
 STRUCT_EXTENTS = {MODEL: MODEL_EXTENTS, DATA: DATA_EXTENTS}
+
+
+@dataclasses.dataclass(frozen=True)
+class StructFields:
+    """The fields the Python bindings expose on MjModel or MjData, by kind, each in the
+    order of MuJoCo's header.
+
+    Attributes:
+      arrays: arrays of numbers, which read as NumPy arrays (`geom_size`, `qpos`,
+        `solver_niter`).
+      texts: arrays of characters: the name, path and text buffers (`names`, `paths`,
+        `text_data`, which read as bytes) and `plugin_attr` (an int8 array).
+      scalars: single numbers: sizes (`nq`, `ngeom`, `nbuffer`), flags (`flg_gravcomp`),
+        `signature`; for MjData also `time`, `ncon`, ...
+      structs: nested MuJoCo structs (`opt`, `vis`, `stat`).
+
+    Arrays of structs (`data.contact`, `data.solver`) are in none of these.
+    """
+
+    arrays: tuple[str, ...]
+    texts: tuple[str, ...]
+    scalars: tuple[str, ...]
+    structs: tuple[str, ...]
+
+
+_CHARACTER = "char"
+# The element type of raw memory (the model's buffer), which reads as no value.
+_RAW = "void"
+
+
+def _field_kind(field_type) -> str | None:
+    """The `StructFields` attribute that lists a field of C type `field_type`, or None."""
+    is_array = isinstance(field_type, (_ast_nodes.PointerType, _ast_nodes.ArrayType))
+    element = field_type.inner_type if is_array else field_type
+    if not isinstance(element, _ast_nodes.ValueType) or element.name == _RAW:
+        return None
+    if element.name in _introspect.STRUCTS:
+        return None if is_array else "structs"
+    if element.name == _CHARACTER:
+        return "texts" if is_array else None
+    return "arrays" if is_array else "scalars"
+
+
+def _struct_fields(struct_name: str, python_type: type) -> StructFields:
+    """The fields of C struct `struct_name` that `python_type` exposes, by kind."""
+    listed = {kind.name: [] for kind in dataclasses.fields(StructFields)}
+    for field in _introspect.STRUCTS[struct_name].fields:
+        kind = _field_kind(field.type)
+        if kind is not None and hasattr(python_type, field.name):
+            listed[kind].append(field.name)
+    return StructFields(**{kind: tuple(names) for kind, names in listed.items()})
+
+
+MODEL_FIELDS = _struct_fields("mjModel", mujoco.MjModel)
+DATA_FIELDS = _struct_fields("mjData", mujoco.MjData)
 
 
 def _abbreviates(word: str, name: str) -> bool:

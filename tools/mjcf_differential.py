@@ -27,6 +27,7 @@ from lxml import etree
 
 import mjcf
 from mjcf import attribute_types, schema
+from mujoco_physics import field_layout
 
 #: Exception types the MJCF layer documents for bad input (docs/mujoco_differences.md).
 DOCUMENTED_ERRORS = (ValueError, OSError)
@@ -94,38 +95,31 @@ def our_outcome(path: str | None, text: str | None = None) -> Outcome:
         return Outcome(None, error)
 
 
-def _size_names(model: mujoco.MjModel) -> list[str]:
-    return [
-        name
-        for name in dir(model)
-        if name.startswith("n")
-        and name not in IGNORED_SIZES
-        and isinstance(getattr(model, name), int)
-    ]
-
-
-def _array_names(model: mujoco.MjModel) -> list[str]:
-    names = []
-    for name in dir(model):
-        if name.startswith("_") or name in IGNORED_ARRAYS or name.startswith("name_"):
-            continue
-        if name.endswith(IGNORED_ARRAY_SUFFIXES):
-            continue
-        if isinstance(getattr(model, name), np.ndarray):
-            names.append(name)
-    return names
+# The model's sizes (`nq`, `ngeom`, ...) and arrays (of numbers and of characters) compared.
+_SIZES = tuple(
+    name
+    for name in field_layout.MODEL_FIELDS.scalars
+    if name.startswith("n") and name not in IGNORED_SIZES
+)
+_ARRAYS = tuple(
+    name
+    for name in field_layout.MODEL_FIELDS.arrays + field_layout.MODEL_FIELDS.texts
+    if name not in IGNORED_ARRAYS
+    and not name.startswith("name_")
+    and not name.endswith(IGNORED_ARRAY_SUFFIXES)
+)
 
 
 def model_differences(theirs: mujoco.MjModel, ours: mujoco.MjModel) -> list[str]:
     """Names of the sizes and arrays (options included) in which two compiled models differ."""
-    different = [n for n in _size_names(theirs) if getattr(theirs, n) != getattr(ours, n)]
+    different = [n for n in _SIZES if getattr(theirs, n) != getattr(ours, n)]
     if different:
         return different
-    for name in _array_names(theirs):
-        a, b = getattr(theirs, name), getattr(ours, name)
+    for name in _ARRAYS:
+        a, b = np.asarray(getattr(theirs, name)), np.asarray(getattr(ours, name))
         if a.shape != b.shape or not np.array_equal(a, b, equal_nan=a.dtype.kind == "f"):
             different.append(name)
-    for struct in ("opt", "vis", "stat"):
+    for struct in field_layout.MODEL_FIELDS.structs:
         if not _structs_equal(getattr(theirs, struct), getattr(ours, struct)):
             different.append(struct)
     return different

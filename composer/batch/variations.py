@@ -43,6 +43,7 @@ import numpy as np
 import mjcf
 from composer.hooks import EnvironmentHooks
 from mjcf import binding, patch_table, patchable_attributes
+from mujoco_physics import field_layout
 
 __all__ = ["EpisodeModel", "PerWorldFields", "measure", "model_arrays", "per_world_fields"]
 
@@ -53,12 +54,9 @@ _RECOMPILE = "needs a recompile, and a batch compiles its model once"
 
 
 def model_arrays(model: mujoco.MjModel) -> dict[str, np.ndarray]:
-    """A copy of every array of `model`, by field name."""
-    return {
-        name: value.copy()
-        for name in dir(model)
-        if not name.startswith("_") and isinstance(value := getattr(model, name), np.ndarray)
-    }
+    """A copy of every array of numbers of `model` (`field_layout.MODEL_FIELDS.arrays`),
+    by field name."""
+    return {name: getattr(model, name).copy() for name in field_layout.MODEL_FIELDS.arrays}
 
 
 def _unpatchable_reason(element, attribute: str) -> str | None:

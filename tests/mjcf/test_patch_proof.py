@@ -2,9 +2,11 @@
 
 import copy
 import itertools
+import math
 import os
 import subprocess
 import sys
+from pathlib import Path
 
 import mujoco
 import pytest
@@ -67,7 +69,7 @@ def test_on_an_unproven_release_the_command_caches_a_proof_that_the_next_process
     prove = fake_release + (
         "from mjcf import patch_proof\n"
         "patch_proof._candidates = lambda: {('geom', 'rgba'), ('geom', 'pos')}\n"
-        "scene = patch_proof._SCENES['primitives (radian)']\n"
+        "scene = patch_proof._scenes()['primitives_radians.xml']\n"
         "patch_proof._corpus = lambda extra: iter([('scene', mjcf.from_xml_string(scene))])\n"
         "raise SystemExit(patch_proof.main([]))\n"
     )
@@ -103,3 +105,25 @@ def test_on_an_unproven_release_the_command_caches_a_proof_that_the_next_process
     )
     assert using.returncode == 0, using.stderr
     assert using.stdout.split("\n")[0] == "True False [('geom', 'rgba')]"
+
+
+_SCENE_FILES = {"blocks_geom_sizes.xml", "creature_degrees.xml", "primitives_radians.xml"}
+
+
+def test_the_proof_reads_its_three_scenes_from_package_data_and_each_compiles():
+    scenes = patch_proof._scenes()
+    assert set(scenes) == _SCENE_FILES
+    models = {name: mujoco.MjModel.from_xml_string(text) for name, text in scenes.items()}
+    # What each scene is there for: degree angles, tendons, geom sizes of a class.
+    assert models["creature_degrees.xml"].joint("knee").range[1] == pytest.approx(math.radians(70))
+    assert models["primitives_radians.xml"].ntendon == 2
+    assert models["blocks_geom_sizes.xml"].geom("knob_1").size[:2] == pytest.approx([0.006, 0.003])
+
+
+def test_every_scene_file_is_package_data_so_that_a_wheel_ships_it():
+    tomllib = pytest.importorskip("tomllib")  # Python 3.11 and later
+    root = Path(mjcf.__file__).parent.parent
+    with open(root / "pyproject.toml", "rb") as file:
+        package_data = tomllib.load(file)["tool"]["setuptools"]["package-data"]["mjcf"]
+    shipped = {path.name for pattern in package_data for path in (root / "mjcf").glob(pattern)}
+    assert shipped == _SCENE_FILES
