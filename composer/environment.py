@@ -16,9 +16,7 @@ from composer.action_validation import action_validator
 from composer.hooks import HOOK_NAMES, EnvironmentHooks
 from composer.utils import argument_checks
 from composer.weak_physics import WeakPhysics
-from mjcf.physics import compile_mjcf_model
-from mujoco_physics.model_snapshot import ModelSnapshot, snapshots_supported
-from mujoco_physics.reset_state import ResetState
+from mjcf.compiled_model import CompiledModel, ModelUpdate
 
 __all__ = [
     "HOOK_NAMES",
@@ -66,15 +64,6 @@ def _collected(observables) -> tuple:
     the very same observables (observables compare by identity)."""
     dicts = (observables,) if isinstance(observables, dict) else observables
     return type(observables), tuple((type(d), tuple(d.items())) for d in dicts)
-
-
-class _ModelUpdate(enum.Enum):
-    """How `Environment._update_model` brought the compiled model up to date."""
-
-    RESTORED = "restored"
-    PATCHED = "patched"
-    LOADED = "loaded"
-    NEW_PHYSICS = "new physics"
 
 
 class Environment(dm_env.Environment):
@@ -169,18 +158,14 @@ class Environment(dm_env.Environment):
             delayed_observation_padding is ObservationPadding.INITIAL_VALUE
         )
         self._legacy_step = legacy_step
-        self._patch_compiled_model = patch_compiled_model
         self._hooks = EnvironmentHooks(task)
         # The compiled model and what is built on it (see `_update_model`).
+        self._compiled_model = CompiledModel(patch=patch_compiled_model)
         self._physics = None
         self._physics_proxy = None
         self._physics_view = None
         self._data = None
         self._ctrl = None
-        self._snapshot = None
-        self._reset_state = ResetState()
-        self._compiled_count = None
-        self._last_model_update = None
         self._check_action = None
         self._observation_updater = None
         self._n_sub_steps = None
@@ -286,13 +271,10 @@ class Environment(dm_env.Environment):
     def close(self) -> None:
         """Frees the physics. Closing again does nothing; a later `reset()` compiles a new
         Physics and starts an episode as on the first reset."""
-        if self._physics is not None:
-            self._physics.free()
+        self._compiled_model.close()
         self._physics = None
         self._physics_proxy = None
         self._physics_view = None
-        self._snapshot = None
-        self._reset_state = ResetState()  # lets go of the data it kept
 
     def __reduce_ex__(self, protocol):
         raise TypeError(
@@ -305,51 +287,31 @@ class Environment(dm_env.Environment):
     # Compiling.
 
     def _update_model(self) -> None:
-        """Brings the compiled model up to date with the MJCF tree, as a fresh compile would.
+        """Brings the compiled model up to date with the MJCF tree, as a fresh compile would,
+        and rebuilds what depends on it.
 
-        The one place that decides what a reset (and construction) does to the model.
-        dm_control recompiles every episode; each outcome here gives the same model, bit
-        for bit, and the cheapest one that is exact is taken (`_ModelUpdate`):
-
-        1. RESTORED: the MJCF tree is unchanged since the last compile and the compiled
-           model has a `ModelSnapshot`. The parameters saved right after compiling are
-           written back, undoing writes made through `physics.bind` during the episode.
-        2. PATCHED: only attribute values changed, each one that `mjcf.model_patch`
-           proved it can write (`RootElement.attribute_changes_since`), and patching is on.
-           The snapshot is restored, the new values are written into the model in place,
-           and the snapshot takes the result.
-        3. LOADED: the tree changed otherwise, but its new compile has the same structure
-           as the current model (`ModelSnapshot.load`: only float parameters differ). They
-           are loaded into the current model in place.
-        4. NEW_PHYSICS: the structure changed, snapshots are not supported, or there is no
-           model yet.
-
-        In every outcome the Physics' bindings and views stay valid except the fourth,
-        which replaces the Physics. After 3 and 4, hooks are rescanned and the action check
-        is rebuilt. After every outcome the `after_compile` hooks run (each outcome stands
-        for dm_control's compile), and the observation updater is rebuilt unless the
-        Physics, the sub-steps and the task's observables (names and objects, see
-        `_collected`) are all the same as last time: as in dm_control, which builds a new
-        updater at every recompile, an observable added between episodes is observed from
-        the next reset. Either way the updater is then reset, as dm_control resets its new
-        one (the reset draws from the random state, which the seed guarantee counts on).
-
-        The data the episode's reset starts from (`mj_resetData` and a forward) is copied
-        from the last reset (`ResetState`) while the model is the same in every field
-        forward reads: outcome 1, or 2 when only colours and materials changed
-        (`changes_are_forward_neutral`), and no `after_compile` hook could have written
-        to the model; anything else resets afresh.
+        `CompiledModel.update` decides how (its class docstring is the contract: the four
+        `ModelUpdate` outcomes, and when the next reset may copy the last one's data).
+        After LOADED and NEW_PHYSICS, hooks are rescanned and the action check is rebuilt;
+        after NEW_PHYSICS, the Physics' proxies are renewed. After every outcome the
+        `after_compile` hooks run (each outcome stands for dm_control's compile); as they
+        may write to the model, differently each time, their presence makes every reset
+        compute its data afresh. The observation updater is rebuilt unless the Physics,
+        the sub-steps and the task's observables (names and objects, see `_collected`) are
+        all the same as last time: as in dm_control, which builds a new updater at every
+        recompile, an observable added between episodes is observed from the next reset.
+        Either way the updater is then reset, as dm_control resets its new one (the reset
+        draws from the random state, which the seed guarantee counts on).
         """
-        root = self._task.root_entity.mjcf_model
-        self._last_model_update = self._bring_model_up_to_date(root)
-        self._compiled_count = root.modification_count
-        if self._last_model_update in (_ModelUpdate.LOADED, _ModelUpdate.NEW_PHYSICS):
+        outcome = self._compiled_model.update(self._task.root_entity.mjcf_model)
+        if outcome is ModelUpdate.NEW_PHYSICS:
+            self._adopt_physics(self._compiled_model.physics)
+        if outcome in (ModelUpdate.LOADED, ModelUpdate.NEW_PHYSICS):
             self._hooks.refresh_entity_hooks()
             self._check_action = action_validator(self._task.action_spec(self._physics_proxy))
         self._run_after_compile_hooks()
         if self._hooks.has_after_compile_hooks:
-            # They may write to the model, differently each time.
-            self._reset_state.invalidate()
+            self._compiled_model.model_may_have_changed()
         observables = self._task.observables
         collected = _collected(observables)
         if (
@@ -363,40 +325,14 @@ class Environment(dm_env.Environment):
         # from the random state, so it happens here too, for the same draws in order.
         self._observation_updater.reset(self._physics_proxy, self._random_state)
 
-    def _bring_model_up_to_date(self, root) -> _ModelUpdate:
-        """Does the model part of `_update_model` and says which outcome it took."""
-        snapshot = self._snapshot
-        if snapshot is not None:
-            changes = root.attribute_changes_since(self._compiled_count)
-            if changes == ():
-                snapshot.restore()
-                return _ModelUpdate.RESTORED
-            if changes and self._patch_compiled_model:
-                snapshot.restore()
-                if self._physics.apply_attribute_changes(changes):
-                    snapshot.save()
-                    if not self._physics.changes_are_forward_neutral(changes):
-                        self._reset_state.invalidate()
-                    return _ModelUpdate.PATCHED
-        self._reset_state.invalidate()
-        model = compile_mjcf_model(root)
-        if snapshot is not None and snapshot.load(model):
-            return _ModelUpdate.LOADED
-        self._replace_physics(root, model)
-        return _ModelUpdate.NEW_PHYSICS
-
-    def _replace_physics(self, root, model) -> None:
-        """Makes a new Physics for `model` the environment's, freeing the old one."""
-        physics = mjcf.Physics.from_compiled_mjcf_model(root, model)
-        if self._physics is not None:
-            self._physics.free()
+    def _adopt_physics(self, physics: mjcf.Physics) -> None:
+        """Makes `physics`, new, the one the environment steps and hands out."""
         physics.legacy_step = self._legacy_step
         self._physics = physics
         self._physics_proxy = weakref.proxy(physics)
         self._physics_view = WeakPhysics(physics, self)
         self._data = physics.data.ptr
         self._ctrl = self._data.ctrl
-        self._snapshot = ModelSnapshot(physics.model.ptr) if snapshots_supported() else None
         self._observation_updater = None
 
     def _run_after_compile_hooks(self) -> None:
@@ -463,9 +399,9 @@ class Environment(dm_env.Environment):
             self._episode_mjcf_prepared = True
         else:
             # The model keeps what the last episode wrote into it.
-            self._reset_state.invalidate()
+            self._compiled_model.model_may_have_changed()
         self._restore_fixed_random_state()
-        with self._physics.reset_context(reset_state=self._reset_state):
+        with self._compiled_model.reset_context():
             self._hooks.initialize_episode(self._physics_proxy, self._random_state)
         self._observation_updater.reset(self._physics_proxy, self._random_state)
         self._reset_next_step = False

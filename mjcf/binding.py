@@ -175,7 +175,7 @@ class Binding:
           ValueError: no MuJoCo fields for `namespace`, or no object of that name.
         """
         family = field_layout.FAMILIES[namespace]
-        layout = physics._layout
+        layout = physics.field_layout
         single = isinstance(named_index, str)
         names = [named_index] if single else list(named_index)
         ids = []

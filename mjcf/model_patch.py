@@ -35,7 +35,8 @@ from mjcf import (
     traversal_utils,
 )
 from mjcf.element import Element
-from mujoco_physics.field_layout import MODEL, ModelLayout
+from mjcf.geom_size_cache import SizePatchCache
+from mujoco_physics.field_layout import MODEL
 
 __all__ = ["patch_supported", "patch_model"]
 
@@ -52,14 +53,17 @@ def patch_supported() -> bool:
     return patch_table.current() is not None
 
 
-def patch_model(physics, layout: ModelLayout, changes, *, proven: dict | None = None) -> bool:
+def patch_model(
+    physics, changes, *, cache: SizePatchCache | None = None, proven: dict | None = None
+) -> bool:
     """Writes the compiled values of changed attributes into `physics`'s model.
 
     Args:
       physics: an `mjcf.Physics` compiled from the model that `changes` come from, whose
         model is the compile of that model as it was before `changes`.
-      layout: the row look-ups of `physics`'s model.
       changes: (element, XML attribute name) pairs, as `attribute_changes_since` gives them.
+      cache: what earlier size patches of `physics`'s compiled model looked up (see
+        `mjcf.geom_size_cache`); None looks everything up afresh.
       proven: (tag, attribute) -> whether `mj_setConst` must follow, in place of the
         table that applies (for the proof, which decides what a table holds).
 
@@ -92,12 +96,14 @@ def patch_model(physics, layout: ModelLayout, changes, *, proven: dict | None = 
             if pair == _GEOM_SIZE:
                 sized_geoms[id(target)] = target
                 continue
-            write = _write_for(physics, layout, target, xml_name)
+            write = _write_for(physics, target, xml_name)
             if write is None:
                 return False
             writes.append(write)
     if sized_geoms:
-        size_writes = geom_size_patch.size_writes(physics, list(sized_geoms.values()))
+        size_writes = geom_size_patch.size_writes(
+            physics, list(sized_geoms.values()), SizePatchCache() if cache is None else cache
+        )
         if size_writes is None:
             return False
         writes.extend(size_writes)
@@ -112,7 +118,7 @@ def patch_model(physics, layout: ModelLayout, changes, *, proven: dict | None = 
             model_statistics.write_statistics(
                 model,
                 model_statistics.compiled_statistics(model, physics.data.ptr),
-                keep=set(physics._mjcf_model.statistic._attributes),
+                keep=set(physics.mjcf_model.statistic._attributes),
             )
         physics.mark_as_dirty()
     return True
@@ -133,7 +139,7 @@ def _elements_using(template, xml_name: str) -> list:
     ]
 
 
-def _write_for(physics, layout: ModelLayout, element, xml_name: str) -> _Write | None:
+def _write_for(physics, element, xml_name: str) -> _Write | None:
     """The field write that gives `element`'s compiled value of `xml_name`, or None."""
     source = traversal_utils.default_value_source(element, xml_name)
     if source is None:
@@ -143,8 +149,9 @@ def _write_for(physics, layout: ModelLayout, element, xml_name: str) -> _Write |
     ref = binding.compiled_field(element, xml_name)
     if ref is None or ref.struct != MODEL:
         return None
+    layout = physics.field_layout
     try:
-        object_id = binding.object_id(layout, physics._mjcf_model, element)
+        object_id = binding.object_id(layout, physics.mjcf_model, element)
     except ValueError:
         return None
     array = getattr(physics.model.ptr, ref.name)

@@ -310,9 +310,7 @@ def _prove_change(root, base, element, pair, record: _Record) -> None:
         outcomes = []
         for set_const in (False, True):
             physics = mjcf.Physics.from_compiled_mjcf_model(root, copy.copy(base))
-            if not model_patch.patch_model(
-                physics, physics._layout, changes, proven={pair: set_const}
-            ):
+            if not model_patch.patch_model(physics, changes, proven={pair: set_const}):
                 record.declined += 1
                 break
             outcomes.append(_differences(physics.model.ptr, compiled))

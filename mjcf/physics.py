@@ -8,8 +8,10 @@ import mujoco
 from mjcf import binding as binding_module
 from mjcf import model_patch
 from mjcf.appearance import changes_are_forward_neutral, forward_neutral_fields
+from mjcf.geom_size_cache import SizePatchCache
 from mujoco_physics import engine
 from mujoco_physics.engine import PhysicsError
+from mujoco_physics.field_layout import ModelLayout
 
 __all__ = ["Binding", "Physics", "PhysicsError", "compile_mjcf_model"]
 
@@ -54,6 +56,7 @@ class Physics(engine.Physics):
         # name, after a reload from XML.
         super()._load(data)
         self._bindings = {(): binding_module.EMPTY_BINDING}
+        self._size_patch_cache = SizePatchCache()
 
     def _new_simulation(self, model: mujoco.MjModel, data: mujoco.MjData) -> engine._Simulation:
         return _BindableSimulation(model, data)
@@ -82,6 +85,18 @@ class Physics(engine.Physics):
         model = compile_mjcf_model(mjcf_model)
         self._mjcf_model = mjcf_model
         self._reload_from_model(model)
+
+    @property
+    def mjcf_model(self):
+        """The `mjcf.RootElement` compiled into this Physics, whose elements `bind` accepts;
+        None for a Physics built from XML or a binary."""
+        return self._mjcf_model
+
+    @property
+    def field_layout(self) -> ModelLayout:
+        """Which object owns each row of the compiled model's and data's arrays
+        (`mujoco_physics.field_layout.ModelLayout`), as `bind` and `named` use it."""
+        return self._layout
 
     @property
     def is_dirty(self) -> bool:
@@ -145,8 +160,11 @@ class Physics(engine.Physics):
           True when the model now equals a fresh compile of the changed MJCF model; its
           data is then to be reset, as after a compile. False, having changed nothing, when
           a change is not one that `mjcf.model_patch` can write (then recompile).
+
+        What size patches look up in the compiled model is kept for the next call, until
+        this Physics loads another model (`mjcf.geom_size_cache`).
         """
-        return model_patch.patch_model(self, self._layout, changes)
+        return model_patch.patch_model(self, changes, cache=self._size_patch_cache)
 
     def changes_are_forward_neutral(self, changes) -> bool:
         """Whether every (element, XML attribute name) change compiles only into fields that
@@ -164,8 +182,10 @@ class Physics(engine.Physics):
         super().__setstate__(state)
 
     def free(self) -> None:
-        """Releases renderers, bindings and MuJoCo structures (see the engine's `free`)."""
+        """Releases renderers, bindings, size-patch look-ups and MuJoCo structures (see the
+        engine's `free`)."""
         self._bindings = {}
+        self._size_patch_cache = SizePatchCache()
         super().free()
 
 

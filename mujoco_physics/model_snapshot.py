@@ -8,6 +8,8 @@ import operator
 import mujoco
 import numpy as np
 
+from mujoco_physics.field_layout import MODEL_FIELDS
+
 # A model whose first array (qpos0) is not empty, so its address is where the buffer starts.
 _PROBE_WITH_JOINT = "<mujoco><worldbody><body><joint/><geom size='1'/></body></worldbody></mujoco>"
 # A model without degrees of freedom, to check the layout where qpos0 is empty.
@@ -31,16 +33,6 @@ class _RawBytes:
         }
 
 
-@functools.cache
-def _array_field_names() -> tuple[str, ...]:
-    probe = mujoco.MjModel.from_xml_string(_PROBE_WITH_JOINT)
-    return tuple(
-        name
-        for name in dir(probe)
-        if not name.startswith("_") and isinstance(getattr(probe, name), np.ndarray)
-    )
-
-
 def _all_arrays_in(model: mujoco.MjModel, start: int, names: tuple[str, ...]) -> bool:
     end = start + model.nbuffer
     for name in names:
@@ -62,7 +54,7 @@ def _buffer_pointer_offset() -> int | None:
     the struct of a probe model, then checked against a second probe; None means
     this MuJoCo lays models out differently and snapshots are not supported.
     """
-    names = _array_field_names()
+    names = MODEL_FIELDS.arrays
     probe = mujoco.MjModel.from_xml_string(_PROBE_WITH_JOINT)
     start = probe.qpos0.ctypes.data
     # The qpos0 pointer itself holds `start`, so the scan ends inside the struct.
@@ -105,7 +97,7 @@ def _structure_mask(model: mujoco.MjModel, start: int, layout: tuple) -> np.ndar
     if mask is not None:
         return mask
     mask = np.ones(model.nbuffer // _WORD.itemsize, dtype=bool)
-    for name in _array_field_names():
+    for name in MODEL_FIELDS.arrays:
         array = getattr(model, name)
         if array.size and array.dtype.kind == "f" and not name.startswith(_UPLOADED_PREFIXES):
             offset = array.ctypes.data - start
@@ -122,21 +114,16 @@ def _buffer_start(model: mujoco.MjModel) -> int:
     return ctypes.c_void_p.from_address(model._address + _buffer_pointer_offset()).value
 
 
-@functools.cache
-def _size_getter() -> operator.attrgetter:
-    """Reads every integer field of a model: the sizes of model and data, and flags."""
-    probe = mujoco.MjModel.from_xml_string(_PROBE_WITH_JOINT)
-    names = [
-        name
-        for name in dir(probe)
-        if not name.startswith("_") and type(getattr(probe, name)) is int
-    ]
-    return operator.attrgetter(*names)
+# Reads every single-number field of a model: the sizes of model and data, its flags and
+# its signature. The flags are not in the buffer, so models whose flags differ must not be
+# loaded into each other.
+_scalars = operator.attrgetter(*MODEL_FIELDS.scalars)
 
 
 def _layout(model: mujoco.MjModel) -> tuple:
-    """Equal for models whose arrays lie at the same places and whose data sizes agree."""
-    return _size_getter()(model)
+    """Equal for models whose arrays lie at the same places, whose data sizes agree and
+    whose flags are the same."""
+    return _scalars(model)
 
 
 # The MjModel structs a snapshot saves besides the buffer. Bindings before mujoco 3.16 give
@@ -172,9 +159,9 @@ class ModelSnapshot:
     `load(other)` does the same with the parameters of another compiled model of the
     same structure, so a recompile that only changed parameters (colours, sizes,
     masses, ...) can reuse everything built on this model. `save()` takes the model's
-    current parameters instead, once they were patched in place. `composer.Environment`
-    decides when a reset restores, patches, loads or compiles afresh in one place:
-    `_update_model`.
+    current parameters instead, once they were patched in place.
+    `mjcf.compiled_model.CompiledModel` decides when a reset restores, patches, loads or
+    compiles afresh.
 
     Raises (on construction):
       RuntimeError: if `snapshots_supported()` is False.

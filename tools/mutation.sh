@@ -9,13 +9,13 @@
 #   --only: run just the mutants whose names match (fnmatch patterns, e.g. the survivors of
 #     an earlier run, or 'composer.environment.*'); the kill rate then counts only those.
 #
-# Works on a copy of the tracked files under .cache/mutation/NAME (default "tree"), with
-# mutmut in its own venv (.cache/mutation/venv), so the working tree and its venv are left
-# alone. mutmut runs, for each mutant, the selected tests that exercise the mutated
-# function. Prints mutmut's summary, the surviving mutants (inspect one with `cd
-# .cache/mutation/NAME && ../venv/bin/mutmut show MUTANT`; rerun them after adding tests
-# with `--only MUTANT ...`, which copies the current tree afresh), and the kill rate:
-# killed / (killed + survived), timeouts counted as killed.
+# Works on a copy of the files git tracks or would track (untracked and not ignored) under
+# .cache/mutation/NAME (default "tree"), with mutmut in its own venv (.cache/mutation/venv),
+# so the working tree and its venv are left alone. mutmut runs, for each mutant, the
+# selected tests that exercise the mutated function. Prints mutmut's summary, the surviving
+# mutants (inspect one with `cd .cache/mutation/NAME && ../venv/bin/mutmut show MUTANT`;
+# rerun them after adding tests with `--only MUTANT ...`, which copies the current tree
+# afresh), and the kill rate: killed / (killed + survived), timeouts counted as killed.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 repo=$(pwd)
@@ -48,11 +48,11 @@ fi
 tree="$work/$name"
 rm -rf "$tree"
 mkdir -p "$tree"
-git ls-files -z | xargs -0 cp --parents -t "$tree"
+git ls-files -z --cached --others --exclude-standard | xargs -0 cp --parents -t "$tree"
 # Lists in mutmut's setup.cfg section are one item per (indented) line. mutmut runs the tests
 # inside mutants/, which holds only what it is told to copy: all of the tree.
 paths=$(printf '\n    %s' "${targets[@]}")
-copied=$(git ls-files | cut -d/ -f1 | sort -u | sed 's/^/    /')
+copied=$(git ls-files --cached --others --exclude-standard | cut -d/ -f1 | sort -u | sed 's/^/    /')
 # Tests that run this project in a Python subprocess of their own cannot see mutmut's copy.
 ignored=$(grep -l "sys.executable" tests -r --include "test_*.py" \
   | grep -v -e test_determinism.py -e test_bad_input.py | sed 's/^/    --ignore=/')

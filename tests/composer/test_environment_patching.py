@@ -6,7 +6,7 @@ from composer_scene import ReachTask, assert_same_episodes, play_episodes
 
 import composer
 import mjcf
-from composer import environment
+from mjcf import compiled_model
 
 
 class VariedTask(ReachTask):
@@ -32,13 +32,13 @@ class VariedTask(ReachTask):
 
 def _count_compiles(monkeypatch) -> list:
     calls = []
-    original = environment.compile_mjcf_model
+    original = compiled_model.compile_mjcf_model
 
     def counting(root):
         calls.append(root)
         return original(root)
 
-    monkeypatch.setattr(environment, "compile_mjcf_model", counting)
+    monkeypatch.setattr(compiled_model, "compile_mjcf_model", counting)
     return calls
 
 
@@ -139,11 +139,20 @@ class BrickTask(ReachTask):
 def test_a_default_class_cylinder_radius_drawn_every_episode_patches_bit_identically(
     monkeypatch,
 ):
+    outcomes = []
+    update = compiled_model.CompiledModel.update
+
+    def recording(self, root):
+        outcomes.append(update(self, root))
+        return outcomes[-1]
+
+    monkeypatch.setattr(compiled_model.CompiledModel, "update", recording)
     patched_env = composer.Environment(BrickTask(), random_state=5)
     compiled_env = composer.Environment(BrickTask(), random_state=5, patch_compiled_model=False)
     patched, compiled = play_episodes(patched_env, 20, 10), play_episodes(compiled_env, 20, 10)
     assert_same_episodes(patched, compiled)
-    assert patched_env._last_model_update is environment._ModelUpdate.PATCHED
+    # Both constructions come first, then the patched environment's 20 resets.
+    assert outcomes[2:22] == [compiled_model.ModelUpdate.PATCHED] * 20
     compiles = _count_compiles(monkeypatch)
     for _ in range(3):
         patched_env.reset()

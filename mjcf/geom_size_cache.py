@@ -1,0 +1,37 @@
+"""`SizePatchCache`: what size patches of one compiled model looked up, kept for the next."""
+
+from __future__ import annotations
+
+import dataclasses
+from typing import NamedTuple
+
+__all__ = ["SizePatchCache", "SpringdamperScan"]
+
+
+class SpringdamperScan(NamedTuple):
+    """Whether a joint of an MJCF model took `springdamper`, at a modification count."""
+
+    modification_count: int
+    found: bool
+
+
+@dataclasses.dataclass
+class SizePatchCache:
+    """What `mjcf.geom_size_patch` looked up in one compiled model, for its later patches.
+
+    Valid for the structure of the compiled model it was filled from (the ids and bodies
+    of its elements), which attribute patches never change: `mjcf.Physics` holds one per
+    model it loads and starts a new one when it loads another.
+
+    Attributes:
+      geom_ids: `<geom>` element -> its compiled id, None where it has none.
+      bodies: (element, `InertiaSettings`) -> its `CompiledBody`, None where its geoms
+        cannot be patched.
+      springdamper: the last look at the MJCF model's joints, None before the first.
+      copies: the bodies' geoms and settings -> their `BodyCopies`.
+    """
+
+    geom_ids: dict = dataclasses.field(default_factory=dict)
+    bodies: dict = dataclasses.field(default_factory=dict)
+    springdamper: SpringdamperScan | None = None
+    copies: dict = dataclasses.field(default_factory=dict)
