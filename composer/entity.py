@@ -11,6 +11,7 @@ import mjcf
 from composer import define
 from composer.entity_observables import Observables
 from composer.observation import observable
+from composer.observation.observable.base import view_source
 
 _NOT_ATTACHED = "{entity} is not attached to a parent entity, so it has no attachment frame"
 _INIT_NOT_CALLED = (
@@ -395,14 +396,20 @@ class ModelWrapperEntity(Entity):
         return self._mjcf_model
 
 
-class _RootBodyFeature(observable.Observable):
-    """Field `kind` of an entity's root body, looked up when an episode's physics is bound.
+class RootBodyFeature(observable.Observable):
+    """Field `kind` of an entity's root body, indexed by `index`, found when it is read.
 
-    Resolving the body late matters: a prop's observables are built with the prop,
-    before it is attached and its root body becomes the attachment frame.
+    Resolving the body late matters: a prop's observables are built with the prop, before
+    it is attached and its root body becomes the attachment frame. `FreePropObservableMixin`
+    builds its pose and velocity observables from this class.
+
+    Args:
+      entity: the `composer.Entity` whose `root_body` is read.
+      kind: the binding attribute, such as 'xpos' or 'cvel'.
+      index: the key selecting from the bound attribute (`slice(3, 6)`).
     """
 
-    def __init__(self, entity: Entity, kind: str, index: slice):
+    def __init__(self, entity: Entity, kind: str, index):
         self._entity = entity
         self._kind = kind
         self._index = index
@@ -410,10 +417,21 @@ class _RootBodyFeature(observable.Observable):
             update_interval=1, buffer_size=None, delay=None, aggregator=None, corruptor=None
         )
 
+    @property
+    def selection(self) -> observable.MJCFSelection:
+        """What this observable reads now: the entity's current root body, `kind`, `(index,)`.
+
+        A new record at each access, since the root body changes when the entity is
+        attached (see `MJCFFeature.selection` for how readers use it).
+        """
+        return observable.MJCFSelection(self._entity.root_body, self._kind, (self._index,))
+
     def _callable(self, physics):
-        binding = physics.bind(self._entity.root_body)
-        kind, index = self._kind, self._index
-        return lambda: getattr(binding, kind)[index]
+        return self.selection.reader(physics)
+
+    def _live_source(self, physics):
+        # One body's rows are a view of MuJoCo's array, so the updater may gather them.
+        return view_source(self.selection.reader(physics)())
 
     def __repr__(self) -> str:
         return f"<root body {self._kind!r}[{self._index}] observable of {self._entity!r}>"
@@ -430,16 +448,16 @@ class FreePropObservableMixin:
 
     @define.observable
     def position(self):
-        return _RootBodyFeature(self._entity, "xpos", slice(None))
+        return RootBodyFeature(self._entity, "xpos", slice(None))
 
     @define.observable
     def orientation(self):
-        return _RootBodyFeature(self._entity, "xquat", slice(None))
+        return RootBodyFeature(self._entity, "xquat", slice(None))
 
     @define.observable
     def linear_velocity(self):
-        return _RootBodyFeature(self._entity, "cvel", slice(3, 6))
+        return RootBodyFeature(self._entity, "cvel", slice(3, 6))
 
     @define.observable
     def angular_velocity(self):
-        return _RootBodyFeature(self._entity, "cvel", slice(0, 3))
+        return RootBodyFeature(self._entity, "cvel", slice(0, 3))

@@ -2,10 +2,12 @@
 
 `batch_reader(observable, physics)` returns a function that reads the observable's value in
 every world, an array with a leading `num_envs` axis. It dispatches on the observable's type
-(`functools.singledispatch`): MJCF features (`MJCFFeature`) and entity root-body features
-(the pose and velocity of `FreePropObservableMixin`) are handled here; a package registers
-readers for its own observable types with `batch_reader.register`. Camera observables
-(`MJCFCamera`) are rendered together, once per observation (`composer.batch.cameras`).
+(`functools.singledispatch`). MJCF features (`MJCFFeature`) and entity root-body features
+(`composer.entity.RootBodyFeature`, the pose and velocity of `FreePropObservableMixin`) are
+read through their public `selection`, the `MJCFSelection` their CPU reading uses too
+(`selection_reader`). A package registers readers for its own observable types with
+`batch_reader.register`. Camera observables (`MJCFCamera`) are rendered together, once
+per observation (`composer.batch.cameras`).
 
 Only options that act on one sample are supported (a batch keeps no per-world buffers):
 `update_interval` 1, `buffer_size` 1, `delay` 0, no corruptor; a named aggregator is the
@@ -18,11 +20,12 @@ from typing import Any
 
 import numpy as np
 
-from composer.entity import _RootBodyFeature
+from composer.entity import RootBodyFeature
 from composer.observation.observable import base
 from composer.observation.observable.mjcf import MJCFCamera, MJCFFeature
+from composer.observation.observable.selection import MJCFSelection
 
-__all__ = ["BatchObservables", "FieldSelection", "batch_reader"]
+__all__ = ["BatchObservables", "FieldSelection", "batch_reader", "selection_reader"]
 
 Reader = Callable[[], Any]
 
@@ -77,29 +80,34 @@ class FieldSelection:
         return xp.reshape(taken, (physics.num_envs, *self._shape))
 
 
-def _selection(physics, binding, kind: str, indices) -> FieldSelection:
-    """The entries of `binding.<kind>` that the per-world `indices` select, in turn."""
-    field, index = binding.selection(kind)
+def selection_reader(selection: MJCFSelection, physics) -> FieldSelection:
+    """Returns a reader of `selection` in every world of `physics`.
+
+    The batched twin of `selection.reader(host_physics)`: it reads the entries of
+    `physics.bind(selection.element).<selection.field>` that `selection.indices` pick, in
+    every world.
+
+    Args:
+      selection: what to read, such as an observable's `selection`.
+      physics: the `BatchPhysics` to read.
+
+    Returns:
+      A zero-argument function returning an array of shape (num_envs, *value shape).
+
+    Raises:
+      AttributeError: for a field the elements' kind has no batched attribute for.
+    """
+    field, index = physics.bind(selection.element).selection(selection.field)
     if not isinstance(index, (int, slice, np.integer)):
         index = physics.arrays.to_host(index)
-    columns = np.arange(int(np.prod(field.c_shape))).reshape(field.c_shape)[index]
-    for key in indices:
-        columns = columns[key]
-    return FieldSelection(physics, field, np.asarray(columns))
+    entries = np.arange(int(np.prod(field.c_shape))).reshape(field.c_shape)
+    return FieldSelection(physics, field, np.asarray(selection.select(entries[index])))
 
 
-@batch_reader.register
-def _mjcf_feature(observable: MJCFFeature, physics) -> Reader:
-    # MJCFFeature keeps its field name, elements and indices private; this reader is its
-    # batched twin in the same package.
-    binding = physics.bind(observable._mjcf_element)
-    return _selection(physics, binding, observable._kind, observable._indices)
-
-
-@batch_reader.register
-def _root_body_feature(observable: _RootBodyFeature, physics) -> Reader:
-    binding = physics.bind(observable._entity.root_body)
-    return _selection(physics, binding, observable._kind, (observable._index,))
+@batch_reader.register(MJCFFeature)
+@batch_reader.register(RootBodyFeature)
+def _selected_feature(observable: MJCFFeature | RootBodyFeature, physics) -> Reader:
+    return selection_reader(observable.selection, physics)
 
 
 def _check_options(name: str, observable: base.Observable) -> None:

@@ -74,14 +74,23 @@ def _consecutive_view(array: np.ndarray, indices: np.ndarray):
     return None
 
 
-class _JointAngleSinCos(observable.Observable):
-    """The sine and cosine of hinge joint angles, as a (n_joints, 2) array."""
+class JointAngleSinCos(observable.Observable):
+    """The sine and cosine of hinge joint angles, as a (n_joints, 2) array.
+
+    Args:
+      joints: the hinge joints (MJCF elements) whose angles are read, in order.
+    """
 
     def __init__(self, joints):
-        self._joints = joints
+        self._joints = tuple(joints)
         super().__init__(
             update_interval=1, buffer_size=None, delay=None, aggregator=None, corruptor=None
         )
+
+    @property
+    def joints(self) -> tuple:
+        """The hinge joints whose `qpos` this observable reads, in the order of its rows."""
+        return self._joints
 
     def _writer(self, physics, out):
         qpos = physics.data.ptr.qpos
@@ -114,15 +123,31 @@ class _JointAngleSinCos(observable.Observable):
         return read
 
 
-class _JointTorques(observable.Observable):
-    """The torque each joint transmits: its 3-axis torque sensor projected on its axis."""
+class JointTorques(observable.Observable):
+    """The torque each joint transmits: its 3-axis torque sensor projected on its axis.
+
+    Args:
+      joints: the hinge joints (MJCF elements), in order.
+      sensors: one 3-axis torque sensor per joint, in the same order, whose frame is
+        aligned with its joint's link frame.
+    """
 
     def __init__(self, joints, sensors):
-        self._joints = joints
-        self._sensors = sensors
+        self._joints = tuple(joints)
+        self._sensors = tuple(sensors)
         super().__init__(
             update_interval=1, buffer_size=None, delay=None, aggregator=None, corruptor=None
         )
+
+    @property
+    def joints(self) -> tuple:
+        """The hinge joints whose `axis` each torque is projected on, in order."""
+        return self._joints
+
+    @property
+    def sensors(self) -> tuple:
+        """The torque sensors whose `sensordata` this observable reads, in joint order."""
+        return self._sensors
 
     def _layout(self, physics) -> tuple[np.ndarray, np.ndarray]:
         """(rows, axes), both (n_joints, 3): each sensor's rows in sensordata and each
@@ -157,7 +182,7 @@ class JacoArmObservables(composer.Observables):
 
     @composer.observable
     def joints_pos(self):
-        return _JointAngleSinCos(self._entity.joints)
+        return JointAngleSinCos(self._entity.joints)
 
     @composer.observable
     def joints_vel(self):
@@ -165,4 +190,4 @@ class JacoArmObservables(composer.Observables):
 
     @composer.observable
     def joints_torque(self):
-        return _JointTorques(self._entity.joints, self._entity.joint_torque_sensors)
+        return JointTorques(self._entity.joints, self._entity.joint_torque_sensors)

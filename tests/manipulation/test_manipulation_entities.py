@@ -114,6 +114,15 @@ def test_arm_joints_torque_matches_the_servo_torques_when_the_arm_holds_still():
     np.testing.assert_allclose(torque, servo, atol=0.05 * np.abs(servo).max())
 
 
+def test_arm_joint_observables_name_the_joints_and_sensors_they_read():
+    arm = JacoArm()
+    joints = [f"joint_{i}" for i in range(1, 7)]
+    assert [joint.name for joint in arm.observables.joints_pos.joints] == joints
+    assert [joint.name for joint in arm.observables.joints_torque.joints] == joints
+    sensors = [sensor.name for sensor in arm.observables.joints_torque.sensors]
+    assert sensors == [f"{joint}_torque" for joint in joints]
+
+
 def test_hand_observes_its_finger_joints_and_the_pinch_site_pose():
     scene = _Scene()
     physics = _physics(scene)

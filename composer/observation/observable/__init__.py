@@ -1,4 +1,5 @@
-"""Observable kinds: generic callables, named MuJoCo features, MJCF-bound features, cameras."""
+"""Observable kinds (generic callables, named MuJoCo features, MJCF-bound features, cameras)
+and the selection record that describes what an MJCF-bound feature reads."""
 
 from composer.observation.observable.base import (
     AGGREGATORS,
@@ -8,12 +9,14 @@ from composer.observation.observable.base import (
     Observable,
 )
 from composer.observation.observable.mjcf import MJCFCamera, MJCFFeature
+from composer.observation.observable.selection import MJCFSelection
 
 __all__ = [
     "AGGREGATORS",
     "Generic",
     "MJCFCamera",
     "MJCFFeature",
+    "MJCFSelection",
     "MujocoCamera",
     "MujocoFeature",
     "Observable",

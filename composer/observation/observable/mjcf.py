@@ -1,10 +1,10 @@
 """Observables addressed by MJCF elements rather than by compiled names."""
 
-import functools
 from collections.abc import Iterable
 
 import mjcf
 from composer.observation.observable import base
+from composer.observation.observable.selection import MJCFSelection
 
 
 def _check_element(obj, owner: str) -> None:
@@ -46,45 +46,46 @@ class MJCFFeature(base.Observable):
         index=None,
     ):
         _check_elements(mjcf_element, f"MJCFFeature({kind!r})")
-        self._kind = kind
-        self._mjcf_element = mjcf_element
-        self._indices = () if index is None else (index,)
+        self._selection = MJCFSelection(mjcf_element, kind, () if index is None else (index,))
         super().__init__(update_interval, buffer_size, delay, aggregator, corruptor)
 
+    @property
+    def selection(self) -> MJCFSelection:
+        """What this observable reads: its element(s), the binding field and the index keys.
+
+        Its value on the CPU is `selection.select(getattr(physics.bind(selection.element),
+        selection.field))`; the batched reader reads the same entries in every world.
+        `MJCFFeature('xpos', site, index=2)` selects (site, 'xpos', (2,)); indexing the
+        observable appends its key to `indices`.
+        """
+        return self._selection
+
     def __getitem__(self, key) -> "MJCFFeature":
+        selection = self._selection
         indexed = MJCFFeature(
-            self._kind,
-            self._mjcf_element,
+            selection.field,
+            selection.element,
             self.update_interval,
             self.buffer_size,
             self.delay,
             self.aggregator,
             self.corruptor,
         )
-        indexed._indices = self._indices + (key,)
+        indexed._selection = selection.indexed(key)
         return indexed
 
-    def _select(self, value):
-        for index in self._indices:
-            value = value[index]
-        return value
-
     def _callable(self, physics):
-        binding = physics.bind(self._mjcf_element)
-        if not self._indices:
-            return functools.partial(getattr, binding, self._kind)
-        kind = self._kind
-        return lambda: self._select(getattr(binding, kind))
+        return self._selection.reader(physics)
 
     def _live_source(self, physics):
         # A binding serves consecutive rows as a view of MuJoCo's array and gathers others
         # into a reused buffer on every read; only the former is live.
-        value = self._select(getattr(physics.bind(self._mjcf_element), self._kind))
-        return base.view_source(value)
+        return base.view_source(self._selection.reader(physics)())
 
     def __repr__(self) -> str:
-        selection = "".join(f"[{index!r}]" for index in self._indices)
-        return f"<MJCFFeature observable {self._kind!r}{selection} of {self._mjcf_element!r}>"
+        selection = self._selection
+        keys = "".join(f"[{key!r}]" for key in selection.indices)
+        return f"<MJCFFeature observable {selection.field!r}{keys} of {selection.element!r}>"
 
 
 class MJCFCamera(base._ImageObservable):

@@ -47,3 +47,11 @@ def test_per_world_variation_example_prints_a_friction_per_world_and_the_derived
     frictions, fields = printed.getvalue().splitlines()
     assert len(set(frictions.strip("[]").split())) == 3
     assert fields == "['body_inertia', 'body_mass', 'geom_friction', 'geom_rgba']"
+
+
+def test_observables_example_reads_one_speed_per_world_with_its_registered_twin():
+    printed = io.StringIO()
+    heading = "Observables"
+    with contextlib.redirect_stdout(printed):
+        exec(compile(_block_under(heading), f"{PAGE.name}: {heading}", "exec"), {})
+    assert printed.getvalue().split("\n")[0] == "(4, 1)"
