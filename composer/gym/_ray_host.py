@@ -11,19 +11,41 @@ comes back, in place of its result, as a `SubEnvFailure`, which the caller raise
 A call's arguments and results cross the process boundary as one pickled `bytes` each
 (`pack`, `unpack`): Ray hands a `bytes` over as it is, where it would serialise each of
 the many small observation arrays on its own, which costs more than the pickling.
+`step`, the call made on every vector step, pickles no arrays at all (each costs more to
+pickle than the plain values of a whole step): its actions arrive as the bytes of one
+buffer of the action space's `FlatLayout` (`StepCall`); the sub-environments write their
+observations into one buffer of the observation space's (a `GymnasiumEnv` straight into
+its row, see `attach_row`), and the reply carries that buffer's bytes and the rest of
+each outcome as a plain tuple (`StepReply`).
 """
 
 import pickle
 import traceback
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Collection, Sequence
 from typing import Any, NamedTuple
 
 import gymnasium
+import numpy as np
+from gymnasium.vector import AutoresetMode
 
-from composer.gym.sub_env_vector import SubEnvironmentError, check_spaces_match
+from composer.gym.flat_layout import FlatBatch, FlatLayout
+from composer.gym.sub_env_vector import (
+    SubEnvironmentError,
+    attach_row,
+    check_spaces_match,
+    step_sub_env,
+)
 from composer.gym.thread_pool import PinnedThreadPool
 
-__all__ = ["HostSpec", "SubEnvFailure", "SubEnvHost", "pack", "unpack"]
+__all__ = [
+    "HostSpec",
+    "StepCall",
+    "StepReply",
+    "SubEnvFailure",
+    "SubEnvHost",
+    "pack",
+    "unpack",
+]
 
 
 def pack(value: Any) -> bytes:
@@ -55,6 +77,32 @@ class HostSpec(NamedTuple):
     action_space: gymnasium.Space
     metadata: dict[str, Any]
     render_mode: str | None
+
+
+class StepCall(NamedTuple):
+    """What `SubEnvHost.step` is called with (packed): the sub-environments to step, in
+    order; their actions, the bytes of a (len(indices), row_bytes) buffer of the action
+    space's `FlatLayout`; the `AutoresetMode`'s value; whether each one's episode was
+    over (see `step_sub_env`)."""
+
+    indices: list[int]
+    actions: bytes
+    autoreset_mode: str
+    episode_over: list[bool]
+
+
+class StepReply(NamedTuple):
+    """What `SubEnvHost.step` returns (packed).
+
+    `observations` is the bytes of the host's (sub-environments, row_bytes) buffer of
+    the observation space's `FlatLayout`, each stepped sub-environment's observation in
+    its row; `outcomes` maps each stepped one to its `SubEnvOutcome` less the
+    observation, as a plain tuple (reward, terminated, truncated, info,
+    final_observation, final_info), or to a `SubEnvFailure`.
+    """
+
+    observations: bytes
+    outcomes: dict[int, tuple | SubEnvFailure]
 
 
 def _portable(error: BaseException) -> BaseException:
@@ -91,6 +139,8 @@ class SubEnvHost:
         self._num_threads = num_threads
         self._pool: PinnedThreadPool | None = None
         self._envs: list[gymnasium.Env] = []
+        self._observations: FlatBatch | None = None  # as `StepReply` says
+        self._actions: FlatBatch | None = None  # as `StepCall` says
 
     def build(self) -> HostSpec | dict[int, SubEnvFailure]:
         """Builds the sub-environments; returns their spaces, or {index: failure} for the
@@ -110,6 +160,11 @@ class SubEnvHost:
             self.close()
             raise
         first = self._envs[0]
+        size = len(self._envs)
+        self._observations = FlatBatch(FlatLayout(first.observation_space), size)
+        self._actions = FlatBatch(FlatLayout(first.action_space), size)
+        rows = self._observations.rows
+        self._pool.run(lambda i: attach_row(self._envs[i], rows[i]), range(size))
         return HostSpec(
             first.observation_space, first.action_space, dict(first.metadata), first.render_mode
         )
@@ -119,12 +174,37 @@ class SubEnvHost:
         *arguments[i])}), with a `SubEnvFailure` where it raised."""
         function, arguments = unpack(call)
         envs = self._envs
+        return pack(self._run(lambda i: _guarded(envs[i], function, arguments[i]), arguments))
+
+    def step(self, call: bytes) -> bytes:
+        """For `call` = pack(`StepCall`), runs `step_sub_env` on those sub-environments
+        and returns pack(`StepReply`)."""
+        step_call: StepCall = unpack(call)
+        indices, actions = step_call.indices, self._actions
+        actions.buffer[indices] = np.frombuffer(step_call.actions, np.uint8).reshape(
+            len(indices), actions.buffer.shape[1]
+        )
+        mode = AutoresetMode(step_call.autoreset_mode)
+        over = dict(zip(indices, step_call.episode_over))
+        outcomes = self._run(lambda i: self._step_into_row(i, mode, over[i]), indices)
+        return pack(StepReply(self._observations.buffer.tobytes(), outcomes))
+
+    def _step_into_row(
+        self, index: int, mode: AutoresetMode, episode_over: bool
+    ) -> tuple | SubEnvFailure:
+        arguments = (self._actions.rows[index], mode, episode_over)
+        outcome = _guarded(self._envs[index], step_sub_env, arguments)
+        if isinstance(outcome, SubEnvFailure):
+            return outcome
+        self._observations.write(index, outcome.observation)
+        return tuple(outcome)[1:]
+
+    def _run(self, task: Callable[[int], Any], indices: Collection[int]) -> dict[int, Any]:
+        """`self._pool.run(task, indices)`, with a dead worker thread's slots failed."""
         try:
-            return pack(
-                self._pool.run(lambda i: _guarded(envs[i], function, arguments[i]), arguments)
-            )
+            return self._pool.run(task, indices)
         except SubEnvironmentError as error:  # a worker thread died (`WorkerDiedError`)
-            return pack({error.index: _failure(error.__cause__)})
+            return {error.index: _failure(error.__cause__)}
 
     def close(self) -> None:
         """Closes the sub-environments and stops the threads."""

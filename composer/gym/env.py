@@ -19,6 +19,9 @@ Contract of the adapter (`GymnasiumEnv`):
   a bool (Stable-Baselines3's key); no other step carries it.
   The reward is checked against the wrapped environment's `reward_spec()`, which must
   describe one number.
+- `write_observations_to(out)` makes `reset` and `step` copy their observations into
+  `out` (arrays laid out as `observation_space`, such as views of one row of a vector
+  env's batch) and return `out` itself, which the next `reset` or `step` overwrites.
 - `render()` draws the `camera` with `mujoco`'s off-screen renderer: (height, width, 3)
   uint8 for 'rgb_array', (height, width) float32 metres for 'depth_array'. With 'human',
   `reset` and `step` draw the scene in a window themselves (`composer.viewer`'s, on
@@ -34,6 +37,7 @@ import gymnasium
 import numpy as np
 
 from composer.gym import spec_spaces
+from composer.gym.sub_env_vector import row_writer
 
 __all__ = ["GymnasiumEnv"]
 
@@ -82,6 +86,39 @@ def _reward_converter(env: dm_env.Environment) -> Callable[[Any], float]:
         return float(reward)
 
     return to_float
+
+
+def _check_out(space: gymnasium.Space, out: Any, where: str = "out") -> None:
+    """Checks that `out` holds one array per leaf of `space`, of its shape and dtype.
+
+    Raises:
+      ValueError: naming the part of `out` (`where`) that does not match.
+    """
+    if isinstance(space, gymnasium.spaces.Dict):
+        if not isinstance(out, Mapping) or list(out) != list(space.spaces):
+            keys = list(out) if isinstance(out, Mapping) else type(out).__name__
+            raise ValueError(
+                f"{where}: expected a dict with the keys {list(space.spaces)}, got {keys}"
+            )
+        for key, part in space.spaces.items():
+            _check_out(part, out[key], f"{where}[{key!r}]")
+        return
+    if (
+        not isinstance(out, np.ndarray)
+        or out.shape != space.shape
+        or out.dtype != space.dtype
+        or not out.flags.writeable
+    ):
+        got = (
+            f"{'an' if out.flags.writeable else 'a read-only'} array of shape {out.shape} "
+            f"and dtype {out.dtype}"
+            if isinstance(out, np.ndarray)
+            else type(out).__name__
+        )
+        raise ValueError(
+            f"{where}: expected a writeable array of shape {space.shape} and dtype "
+            f"{space.dtype}, got {got}"
+        )
 
 
 def _window_title(env: dm_env.Environment) -> str:
@@ -162,6 +199,8 @@ class GymnasiumEnv(gymnasium.Env):
         if hasattr(env, "control_timestep"):
             self.metadata["render_fps"] = 1.0 / env.control_timestep()
         self._flatten = flatten_observations
+        self._out = None
+        self._write_out = None
         self._observation_signature = None
         self._follow_observation_spec()
         self.action_space = spec_spaces.box_from_spec(env.action_spec())
@@ -242,6 +281,28 @@ class GymnasiumEnv(gymnasium.Env):
             info,
         )
 
+    def write_observations_to(self, out: Any) -> None:
+        """Makes `reset` and `step` copy their observations into `out` and return it.
+
+        A vector env gives each sub-environment views of its row of the batched arrays,
+        so that an observation is copied once, straight to where it is returned from.
+        The arrays returned are then `out`'s, overwritten by the next `reset` or `step`.
+
+        Args:
+          out: arrays laid out as `observation_space` (a dict of them for a `Dict`, one
+            for a `Box`), each writeable and of its leaf's shape and dtype; None to
+            return new arrays again.
+
+        Raises:
+          ValueError: naming the part of `out` that does not match `observation_space`;
+            also raised by the `reset` that changes `observation_space` (an observable
+            was changed) so that `out` no longer matches.
+        """
+        if out is not None:
+            _check_out(self.observation_space, out)
+        self._out = out
+        self._write_out = None if out is None or self._flat is not None else row_writer(out)
+
     def render(self) -> np.ndarray | None:
         """Returns the camera's view in the render mode chosen at construction; None for
         no render mode, and for 'human' (which redraws the window now)."""
@@ -295,6 +356,13 @@ class GymnasiumEnv(gymnasium.Env):
         else:
             self._flat = None
             self.observation_space = spec_spaces.space_from_spec(observation_spec)
+        if self._out is not None:
+            self.write_observations_to(self._out)
 
     def _observation(self, observation):
-        return observation if self._flat is None else self._flat(observation)
+        if self._flat is not None:
+            return self._flat(observation, out=self._out)
+        if self._out is None:
+            return observation
+        self._write_out(observation)
+        return self._out

@@ -5,7 +5,11 @@ when this module is imported. Each actor (a `composer.gym._ray_host.SubEnvHost`)
 `envs_per_actor` consecutive sub-environments on its own threads, so one actor call per
 vector step steps all of them. Batching, seeding and autoreset are `SubEnvVectorEnv`'s,
 and the per-sub-environment functions are the same module functions the threaded
-vector env runs, so with the same seeds and actions the results are bit-identical.
+vector env runs, so with the same seeds and actions the results are bit-identical. On
+each step the actions go to an actor, and its sub-environments' observations come back,
+as one buffer of the space's `FlatLayout` each (see `composer.gym._ray_host`): actions
+arrive in the action space's dtype (one of another dtype is cast to it), and the
+observations are copied here into the batched arrays one leaf at a time.
 
 Fault tolerance. An actor that dies (its process is killed or crashes, or its node is
 removed) is replaced by a new one whose sub-environments are built afresh, at most
@@ -41,9 +45,19 @@ from collections.abc import Callable, Sequence
 from typing import Any, NamedTuple, NoReturn
 
 import gymnasium
+import numpy as np
 from gymnasium.vector import AutoresetMode
 
-from composer.gym._ray_host import HostSpec, SubEnvFailure, SubEnvHost, pack, unpack
+from composer.gym._ray_host import (
+    HostSpec,
+    StepCall,
+    StepReply,
+    SubEnvFailure,
+    SubEnvHost,
+    pack,
+    unpack,
+)
+from composer.gym.flat_layout import FlatBatch, FlatLayout, leaves
 from composer.gym.sub_env_vector import (
     SubEnvironmentError,
     SubEnvOutcome,
@@ -103,6 +117,18 @@ class _Gathered(NamedTuple):
 
     results: dict[int, Any]
     lost: tuple[int, ...]
+
+
+class _StepBuffers(NamedTuple):
+    """What one actor's steps go through: `actions`, a `FlatBatch` of its
+    sub-environments' actions (`StepCall.actions`); `observations`, where its
+    `StepReply.observations` land, shaped as the actor's (sub-environments, row_bytes);
+    `copies`, the (rows of a batched array, leaf of `observations`) pairs that move them
+    into the batched observations."""
+
+    actions: FlatBatch
+    observations: np.ndarray
+    copies: tuple[tuple[np.ndarray, np.ndarray], ...]
 
 
 class RayVectorEnv(SubEnvVectorEnv):
@@ -201,6 +227,7 @@ class RayVectorEnv(SubEnvVectorEnv):
             render_mode=self._spec.render_mode,
             copy=copy,
         )
+        self._step_buffers = self._make_step_buffers()
 
     @property
     def actors(self) -> tuple:
@@ -216,6 +243,22 @@ class RayVectorEnv(SubEnvVectorEnv):
         """The indices of the sub-environments that actor number `actor` holds."""
         start = actor * self.envs_per_actor
         return range(start, min(start + self.envs_per_actor, len(self._env_fns)))
+
+    def _make_step_buffers(self) -> list[_StepBuffers]:
+        """One `_StepBuffers` per actor."""
+        observation_layout = FlatLayout(self.single_observation_space)
+        action_layout = FlatLayout(self.single_action_space)
+        batch_leaves = leaves(self._observations)
+        buffers = []
+        for k in range(len(self._actors)):
+            indices = self.indices_of(k)
+            observations = observation_layout.allocate(len(indices))
+            rows = [leaf[indices.start : indices.stop] for leaf in batch_leaves]
+            copies = tuple(zip(rows, leaves(observation_layout.views(observations))))
+            buffers.append(
+                _StepBuffers(FlatBatch(action_layout, len(indices)), observations, copies)
+            )
+        return buffers
 
     def _start_actors(self, actors: Sequence[int] | range) -> None:
         """Starts (or replaces) the listed actors and builds their sub-environments.
@@ -361,9 +404,7 @@ class RayVectorEnv(SubEnvVectorEnv):
         for i, args in arguments.items():
             k = i // self.envs_per_actor
             by_actor.setdefault(k, {})[i - k * self.envs_per_actor] = args
-        pending = {
-            k: self._actors[k].map.remote(pack((function, local))) for k, local in by_actor.items()
-        }
+        pending = {k: self._send(k, function, local) for k, local in by_actor.items()}
         replies, dead = self._gather(pending)
         for k in dead:
             self._replace(k)
@@ -371,7 +412,7 @@ class RayVectorEnv(SubEnvVectorEnv):
         failures: dict[int, SubEnvFailure] = {}
         for k, reply in replies.items():
             start = self.indices_of(k).start
-            for local, result in unpack(reply).items():
+            for local, result in self._received(k, function, reply).items():
                 if isinstance(result, SubEnvFailure):
                     failures[start + local] = result
                     continue
@@ -380,6 +421,44 @@ class RayVectorEnv(SubEnvVectorEnv):
                     store(start + local, result)
         _raise_lowest(failures)
         return _Gathered(results, tuple(i for k in dead for i in self.indices_of(k)))
+
+    def _send(self, actor: int, function: Callable[..., Any], arguments: dict[int, tuple]):
+        """Calls actor number `actor` with {its index i: arguments}: its `step` with a
+        `StepCall` for `step_sub_env`, its `map` for any other function; returns the
+        reply's reference."""
+        if function is not step_sub_env:
+            return self._actors[actor].map.remote(pack((function, arguments)))
+        actions = self._step_buffers[actor].actions
+        episode_over = []
+        for position, (action, _, over) in enumerate(arguments.values()):
+            actions.write(position, action)
+            episode_over.append(over)
+        mode = self.autoreset_mode.value
+        call = StepCall(
+            list(arguments), actions.buffer[: len(arguments)].tobytes(), mode, episode_over
+        )
+        return self._actors[actor].step.remote(pack(call))
+
+    def _received(self, actor: int, function: Callable[..., Any], reply: bytes) -> dict[int, Any]:
+        """The results in actor number `actor`'s `reply`, by its own indices; a step's
+        observations are copied into the batched arrays, and its outcomes hold the rows."""
+        if function is not step_sub_env:
+            return unpack(reply)
+        step_reply: StepReply = unpack(reply)
+        buffers = self._step_buffers[actor]
+        observations = buffers.observations
+        observations[...] = np.frombuffer(step_reply.observations, np.uint8).reshape(
+            observations.shape
+        )
+        for rows, received in buffers.copies:
+            rows[...] = received
+        start, batch_rows = self.indices_of(actor).start, self._rows
+        return {
+            local: fields
+            if isinstance(fields, SubEnvFailure)
+            else SubEnvOutcome(batch_rows[start + local], *fields)
+            for local, fields in step_reply.outcomes.items()
+        }
 
     def _gather(self, pending: dict[int, Any]) -> tuple[dict[int, Any], list[int]]:
         """Waits for every actor's reply; returns {actor: reply} and the actors that died.

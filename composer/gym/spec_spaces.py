@@ -94,8 +94,16 @@ class FlatObservations:
             lambda packed: spaces.Dict(collections.OrderedDict(packed)),
         )
 
-    def __call__(self, observation: Mapping[str, np.ndarray]) -> Any:
-        """Returns `observation` (a dict of the spec's arrays) flattened as `space` says."""
+    def __call__(self, observation: Mapping[str, np.ndarray], out: Any = None) -> Any:
+        """Returns `observation` (a dict of the spec's arrays) flattened as `space` says;
+        with `out` (arrays laid out as `space`), written into `out`, which is returned."""
+        if out is not None:
+            features = out if not self.images else out.get("features")
+            if self.features:
+                np.concatenate([observation[name].ravel() for name in self.features], out=features)
+            for name in self.images:
+                out[name][...] = observation[name]
+            return out
         return self._pack(
             np.concatenate([observation[name].ravel() for name in self.features])
             if self.features

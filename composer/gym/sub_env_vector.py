@@ -7,6 +7,11 @@ that run next to a sub-environment (`reset_sub_env`, `step_sub_env`, `call_sub_e
 plain module functions of the sub-environment and picklable arguments, so a backend that
 runs sub-environments in other threads, processes or machines calls the same ones.
 
+Observations are written once, straight into their batch rows: a backend gives each
+sub-environment that is a `GymnasiumEnv` its row (`attach_row`), views of the batched
+arrays that it writes its observations into and returns; any other sub-environment's
+observation is copied into its row when its outcome is stored.
+
 Autoreset (https://farama.org/Vector-Autoreset-Mode), for a sub-environment whose
 episode ended (terminated or truncated) at step t:
 
@@ -32,9 +37,13 @@ __all__ = [
     "SubEnvVectorEnv",
     "SubEnvOutcome",
     "SubEnvironmentError",
+    "attach_row",
     "call_sub_env",
     "check_spaces_match",
+    "copied",
     "read_row",
+    "row_views",
+    "row_writer",
     "reset_sub_env",
     "step_sub_env",
 ]
@@ -101,6 +110,8 @@ def step_sub_env(
         return reset_sub_env(env, None, None)
     observation, reward, terminated, truncated, info = env.step(action)
     if autoreset_mode is AutoresetMode.SAME_STEP and (terminated or truncated):
+        # The reset overwrites the row that an attached sub-environment returned.
+        observation = copied(observation)
         reset_observation, reset_info = env.reset()
         return SubEnvOutcome(
             reset_observation, reward, terminated, truncated, reset_info, observation, info
@@ -126,6 +137,15 @@ def _close_sub_env(env: gymnasium.Env) -> None:
     env.close()
 
 
+def attach_row(env: gymnasium.Env, row: Any) -> None:
+    """Makes `env` write its observations into `row` and return it, if it is a
+    `GymnasiumEnv` (not wrapped: a wrapper may keep or change what it returns)."""
+    from composer.gym.env import GymnasiumEnv  # imports dm_env: only where one runs
+
+    if isinstance(env, GymnasiumEnv):
+        env.write_observations_to(row)
+
+
 def _batch_copier(batch) -> Callable[[], Any]:
     """A function returning a copy of `batch` (an array, or dict/tuple of them).
 
@@ -142,35 +162,64 @@ def _batch_copier(batch) -> Callable[[], Any]:
     return batch.copy
 
 
+def row_views(batch, index: int):
+    """Row `index` of a batched observation (array, or dict/tuple of them), as views.
+
+    A row of a batch of scalars is a 0-d array, so that it can be written in place.
+    """
+    if isinstance(batch, dict):
+        return type(batch)((key, row_views(part, index)) for key, part in batch.items())
+    if isinstance(batch, tuple):
+        return tuple(row_views(part, index) for part in batch)
+    return batch[index, ...]
+
+
+def copied(observation):
+    """`observation` (an array, or dict/tuple of them) with every array copied."""
+    if isinstance(observation, dict):
+        return type(observation)((key, copied(part)) for key, part in observation.items())
+    if isinstance(observation, tuple):
+        return tuple(copied(part) for part in observation)
+    return observation.copy() if isinstance(observation, np.ndarray) else observation
+
+
 def read_row(batch, index: int):
     """A copy of row `index` of a batched observation (array, or dict/tuple of them)."""
-    if isinstance(batch, dict):
-        return type(batch)((key, read_row(part, index)) for key, part in batch.items())
-    if isinstance(batch, tuple):
-        return tuple(read_row(part, index) for part in batch)
-    return batch[index].copy()
+    return copied(row_views(batch, index))
 
 
-def _row_writer(batch) -> Callable[[int, Any], None]:
-    """A function `write(index, value)` that writes `value` into row `index` of `batch`
-    (an array, or dict/tuple of them); built once, as `_batch_copier`."""
-    if isinstance(batch, dict):
-        parts = [(key, _row_writer(part)) for key, part in batch.items()]
+def row_writer(row) -> Callable[[Any], None]:
+    """A function `write(value)` that copies `value` into `row` (the views `row_views`
+    returns), built once per row: assigning to a kept view costs half as much as
+    indexing the batch anew."""
+    if isinstance(row, dict):
+        # Arrays are assigned here rather than by a writer each, which saves a Python
+        # call per array on every step.
+        arrays = [(key, part) for key, part in row.items() if isinstance(part, np.ndarray)]
+        nested = [
+            (key, row_writer(part)) for key, part in row.items() if not isinstance(part, np.ndarray)
+        ]
 
-        def write_dict(index: int, value) -> None:
-            for key, write_part in parts:
-                write_part(index, value[key])
+        def write_dict(value) -> None:
+            for key, view in arrays:
+                view[...] = value[key]
+            for key, write_part in nested:
+                write_part(value[key])
 
         return write_dict
-    if isinstance(batch, tuple):
-        writers = [_row_writer(part) for part in batch]
+    if isinstance(row, tuple):
+        writers = [row_writer(part) for part in row]
 
-        def write_tuple(index: int, value) -> None:
+        def write_tuple(value) -> None:
             for write_part, item in zip(writers, value):
-                write_part(index, item)
+                write_part(item)
 
         return write_tuple
-    return batch.__setitem__
+
+    def write_array(value) -> None:
+        row[...] = value
+
+    return write_array
 
 
 class SubEnvVectorEnv(VectorEnv):
@@ -215,7 +264,9 @@ class SubEnvVectorEnv(VectorEnv):
         self.observation_space = batch_space(single_observation_space, num_envs)
         self.action_space = batch_space(single_action_space, num_envs)
         self._observations = create_empty_array(single_observation_space, num_envs, fn=np.zeros)
-        self._write_observation = _row_writer(self._observations)
+        # Row i's views are what sub-environment i writes into (see `attach_row`).
+        self._rows = [row_views(self._observations, i) for i in range(num_envs)]
+        self._row_writers = [row_writer(row) for row in self._rows]
         self._copy_observations = _batch_copier(self._observations)
         self._rewards = np.zeros(num_envs, dtype=np.float64)
         self._terminations = np.zeros(num_envs, dtype=np.bool_)
@@ -428,7 +479,8 @@ class SubEnvVectorEnv(VectorEnv):
 
     def _store(self, index: int, outcome: SubEnvOutcome) -> None:
         """Writes one sub-environment's outcome into row `index` of the batched arrays."""
-        self._write_observation(index, outcome.observation)
+        if outcome.observation is not self._rows[index]:  # not written there already
+            self._row_writers[index](outcome.observation)
         self._rewards[index] = outcome.reward
         self._terminations[index] = outcome.terminated
         self._truncations[index] = outcome.truncated

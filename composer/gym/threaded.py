@@ -13,7 +13,7 @@ from typing import Any
 import gymnasium
 from gymnasium.vector import AutoresetMode
 
-from composer.gym.sub_env_vector import SubEnvVectorEnv, check_spaces_match
+from composer.gym.sub_env_vector import SubEnvVectorEnv, attach_row, check_spaces_match
 from composer.gym.thread_pool import PinnedThreadPool
 
 __all__ = ["ThreadedVectorEnv"]
@@ -79,10 +79,15 @@ class ThreadedVectorEnv(SubEnvVectorEnv):
             render_mode=first.render_mode,
             copy=copy,
         )
+        self._map(attach_row, {i: (row,) for i, row in enumerate(self._rows)})
 
     @property
     def envs(self) -> tuple[gymnasium.Env, ...]:
-        """The sub-environments (use them only between calls on this vector env)."""
+        """The sub-environments (use them only between calls on this vector env).
+
+        A `GymnasiumEnv` among them writes its observations into its row of the vector
+        env's arrays (see `GymnasiumEnv.write_observations_to`).
+        """
         return tuple(self._envs)
 
     def _map(

@@ -205,6 +205,50 @@ def test_env_checker_passes_after_an_observable_is_disabled():
         check_env(env, skip_render_check=True)
 
 
+def _empty_like(space):
+    if isinstance(space, gymnasium.spaces.Dict):
+        return {key: _empty_like(part) for key, part in space.spaces.items()}
+    return np.full(space.shape, np.nan, space.dtype)
+
+
+@pytest.mark.parametrize("flatten", [False, True])
+def test_observations_written_to_given_arrays_are_those_a_twin_env_returns(flatten):
+    ours = GymnasiumEnv(manipulation.load("lift_brick_features"), flatten_observations=flatten)
+    twin = GymnasiumEnv(manipulation.load("lift_brick_features"), flatten_observations=flatten)
+    out = _empty_like(ours.observation_space)
+    ours.write_observations_to(out)
+    steps = [lambda env: env.reset(seed=4)[0]]
+    steps += [
+        lambda env, a=a: env.step(a)[0] for a in (twin.action_space.low, twin.action_space.high)
+    ]
+    for step in steps:
+        mine, theirs = step(ours), step(twin)
+        assert mine is out
+        if flatten:
+            np.testing.assert_array_equal(mine, theirs)
+        else:
+            for name in theirs:
+                np.testing.assert_array_equal(mine[name], theirs[name], err_msg=name)
+
+
+def test_write_observations_to_refuses_an_array_of_another_shape_naming_its_key():
+    env = GymnasiumEnv(slider_environment())
+    out = {"position": np.zeros((1, 1)), "velocity": np.zeros(1)}
+    with pytest.raises(
+        ValueError, match=r"out\['velocity'\]: expected a writeable array of shape \(1, 1\)"
+    ):
+        env.write_observations_to(out)
+
+
+def test_a_reset_that_changes_the_observation_space_refuses_the_given_arrays():
+    env = GymnasiumEnv(slider_environment())
+    env.write_observations_to({"position": np.zeros((1, 1)), "velocity": np.zeros((1, 1))})
+    env.reset(seed=0)
+    env.dm_env.task.task_observables["velocity"].enabled = False
+    with pytest.raises(ValueError, match=r"out: expected a dict with the keys \['position'\]"):
+        env.reset(seed=0)
+
+
 def test_step_after_the_episode_ended_asks_for_reset():
     env = GymnasiumEnv(slider_environment(end_after_steps=1))
     with pytest.raises(RuntimeError, match="call reset"):

@@ -90,6 +90,28 @@ def test_same_seeds_and_actions_give_bit_identical_results_to_the_threaded_env(r
     assert ended == 8
 
 
+def _ending_slider(steps):
+    return GymnasiumEnv(slider_environment(end_after_steps=steps))
+
+
+def test_same_step_autoreset_final_observations_match_the_threaded_envs(ray, closing):
+    # Each actor's sub-environments write into one flat buffer; the final observation of
+    # an episode reset in the same step must survive the reset written over it.
+    fns = [functools.partial(_ending_slider, n) for n in (1, 2, 3, 2)]
+    ours = closing(RayVectorEnv(fns, envs_per_actor=2, autoreset_mode="SameStep"))
+    reference = closing(ThreadedVectorEnv(fns, num_threads=2, autoreset_mode="SameStep"))
+    assert _bits(ours.reset(seed=3)[0]) == _bits(reference.reset(seed=3)[0])
+    finals = 0
+    for action in np.random.default_rng(1).uniform(-1, 1, size=(5, 4, 1)):
+        got, expected = ours.step(action), reference.step(action)
+        assert _bits(got[:4]) == _bits(expected[:4])
+        assert got[4]["_final_obs"].tolist() == expected[4]["_final_obs"].tolist()
+        for i in np.flatnonzero(expected[4]["_final_obs"]):
+            assert _bits(got[4]["final_obs"][i]) == _bits(expected[4]["final_obs"][i])
+            finals += 1
+    assert finals == 5 + 2 + 1 + 2
+
+
 def test_make_vec_with_backend_ray_matches_the_threads_backend(ray, closing):
     made = {
         backend: closing(

@@ -77,6 +77,30 @@ def test_flat_space_concatenates_feature_bounds_and_keeps_images_apart():
     assert observation["camera"] is image
 
 
+def test_flattening_into_given_arrays_writes_features_and_images_there():
+    spec = {
+        "joint": specs.Array((1, 2), np.float64),
+        "camera": specs.Array((1, 2, 2, 3), np.uint8),
+        "speed": specs.Array((1,), np.float64),
+    }
+    flat = spec_spaces.FlatObservations(spec)
+    out = {"features": np.zeros(3), "camera": np.zeros((1, 2, 2, 3), np.uint8)}
+    image = np.full((1, 2, 2, 3), 7, np.uint8)
+    returned = flat(
+        {"joint": np.array([[0.5, -1.5]]), "camera": image, "speed": np.array([3.0])}, out=out
+    )
+    assert returned is out
+    assert out["features"].tolist() == [0.5, -1.5, 3.0]
+    assert out["camera"].tolist() == image.tolist()
+
+
+def test_flattening_features_only_into_a_given_array_fills_it():
+    flat = spec_spaces.FlatObservations({"a": specs.Array((2,), np.float64)})
+    out = np.zeros(2)
+    assert flat({"a": np.array([4.0, 5.0])}, out=out) is out
+    assert out.tolist() == [4.0, 5.0]
+
+
 def test_flat_space_of_features_only_is_one_box():
     spec = {"a": specs.Array((2,), np.float64), "b": specs.Array((1, 3), np.float64)}
     flat = spec_spaces.FlatObservations(spec)

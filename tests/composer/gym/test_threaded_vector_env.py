@@ -5,7 +5,7 @@ import threading
 import gymnasium
 import numpy as np
 import pytest
-from gym_scene import CounterEnv
+from gym_scene import CounterEnv, slider_environment
 from gymnasium.vector import AutoresetMode, SyncVectorEnv
 
 import manipulation
@@ -156,6 +156,43 @@ def test_every_autoreset_mode_matches_gymnasiums_sync_vector_env(mode):
         for mine, theirs in zip(got[:4], expected[:4]):
             np.testing.assert_array_equal(mine, theirs)
         assert got[4].keys() == expected[4].keys()
+    ours.close()
+
+
+def _sliders(lengths):
+    return [lambda n=n: GymnasiumEnv(slider_environment(end_after_steps=n)) for n in lengths]
+
+
+def _assert_same_observations(got, expected):
+    assert got.keys() == expected.keys()
+    for key in expected:
+        np.testing.assert_array_equal(got[key], expected[key], err_msg=key)
+
+
+@pytest.mark.parametrize("mode", list(AutoresetMode))
+def test_gymnasium_env_sub_envs_writing_into_their_rows_match_sync_vector_env(mode):
+    # Each GymnasiumEnv writes its observations into its row of the batch; SyncVectorEnv
+    # copies new ones in. Episodes of 1 to 3 steps cross every autoreset path.
+    lengths = [1, 3, 2, 2]
+    ours = ThreadedVectorEnv(_sliders(lengths), 2, autoreset_mode=mode, copy=False)
+    reference = SyncVectorEnv(_sliders(lengths), autoreset_mode=mode)
+    _assert_same_observations(ours.reset(seed=5)[0], reference.reset(seed=5)[0])
+    for _ in range(7):
+        if mode is AutoresetMode.DISABLED:
+            done = reference._terminations | reference._truncations
+            if done.any():
+                expected = reference.reset(options={"reset_mask": done.copy()})
+                got = ours.reset(options={"reset_mask": done.copy()})
+                _assert_same_observations(got[0], expected[0])
+        action = np.full((4, 1), 0.5)
+        got, expected = ours.step(action), reference.step(action)
+        _assert_same_observations(got[0], expected[0])
+        for mine, theirs in zip(got[1:4], expected[1:4]):
+            np.testing.assert_array_equal(mine, theirs)
+        if "final_obs" in expected[4]:
+            np.testing.assert_array_equal(got[4]["_final_obs"], expected[4]["_final_obs"])
+            for i in np.flatnonzero(expected[4]["_final_obs"]):
+                _assert_same_observations(got[4]["final_obs"][i], expected[4]["final_obs"][i])
     ours.close()
 
 
