@@ -168,6 +168,7 @@ class Environment(dm_env.Environment):
         self._ctrl = None
         self._check_action = None
         self._observation_updater = None
+        self._observation_out = None  # see `write_observations_to`
         self._n_sub_steps = None
         self._collected_observables = None
         # Episode bookkeeping.
@@ -238,6 +239,29 @@ class Environment(dm_env.Environment):
 
     def observation_spec(self):
         return self._observation_updater.observation_spec()
+
+    def write_observations_to(self, out) -> None:
+        """Makes `reset` and `step` write their observations into `out` and return `out`
+        itself as the TimeStep's observation, which the next `reset` or `step` overwrites.
+
+        For a caller that keeps observations in arrays of its own, such as a vector env's
+        batch rows: each observation is then copied once, straight there. It holds while
+        the observation spec stays as it is; a reset that changes it (an observable added
+        or changed between episodes) goes back to new arrays.
+
+        Args:
+          out: a dict of arrays in the structure of `observation_spec()` (its keys, in
+            any order), each writeable, of its spec's shape and dtype; or None for new
+            arrays at every call (the default).
+
+        Raises:
+          ValueError: naming the key of `out` that does not match `observation_spec()`.
+        """
+        if out is not None:
+            problem = self._observation_updater.output_problem(out)
+            if problem is not None:
+                raise ValueError(f"write_observations_to: {problem}")
+        self._observation_out = out
 
     def reward_spec(self):
         spec = self._task.get_reward_spec()
@@ -324,6 +348,9 @@ class Environment(dm_env.Environment):
         # dm_control resets the updater it builds at every compile; the reset may draw
         # from the random state, so it happens here too, for the same draws in order.
         self._observation_updater.reset(self._physics_proxy, self._random_state)
+        out = self._observation_out
+        if out is not None and self._observation_updater.output_problem(out) is not None:
+            self._observation_out = None  # the observation spec changed: new arrays again
 
     def _adopt_physics(self, physics: mjcf.Physics) -> None:
         """Makes `physics`, new, the one the environment steps and hands out."""
@@ -409,7 +436,7 @@ class Environment(dm_env.Environment):
             step_type=_FIRST,
             reward=None,
             discount=None,
-            observation=self._observation_updater.get_observation(),
+            observation=self._observation_updater.get_observation(self._observation_out),
         )
 
     def _restore_fixed_random_state(self) -> None:
@@ -458,7 +485,7 @@ class Environment(dm_env.Environment):
             hooks.after_step(physics, random_state)
             updater.finish_control_step()
             self._reset_next_step = True
-            return dm_env.TimeStep(_LAST, 0.0, 0.0, updater.get_observation())
+            return dm_env.TimeStep(_LAST, 0.0, 0.0, updater.get_observation(self._observation_out))
         if hooks.has_after_step_hooks:
             hooks.after_step(physics, random_state)
         updater.update(unsampled_steps)
@@ -470,7 +497,9 @@ class Environment(dm_env.Environment):
             step_type = _LAST
         else:
             step_type = _MID
-        return dm_env.TimeStep(step_type, reward, discount, updater.get_observation())
+        return dm_env.TimeStep(
+            step_type, reward, discount, updater.get_observation(self._observation_out)
+        )
 
     def _substeps_in_chunks(self) -> int:
         """Steps the physics straight through to each sub-step where observables are due.

@@ -121,6 +121,16 @@ def _check_out(space: gymnasium.Space, out: Any, where: str = "out") -> None:
         )
 
 
+def _same_layout(observation_spec: Any, space: gymnasium.Space) -> bool:
+    """Whether `space` (a Dict of Boxes) has `observation_spec`'s keys, shapes and dtypes."""
+    if not isinstance(observation_spec, Mapping) or not isinstance(space, gymnasium.spaces.Dict):
+        return False
+    return set(observation_spec) == set(space.spaces) and all(
+        space[name].shape == spec.shape and space[name].dtype == np.dtype(spec.dtype)
+        for name, spec in observation_spec.items()
+    )
+
+
 def _window_title(env: dm_env.Environment) -> str:
     task = getattr(env, "task", None)
     return type(env).__name__ if task is None else f"{type(task).__name__} ({type(env).__name__})"
@@ -302,6 +312,14 @@ class GymnasiumEnv(gymnasium.Env):
             _check_out(self.observation_space, out)
         self._out = out
         self._write_out = None if out is None or self._flat is not None else row_writer(out)
+        # A composer.Environment writes its observations into `out` itself, which saves
+        # copying them twice; its spec may still differ from the space in a dtype.
+        wrapped_writes = getattr(self._env, "write_observations_to", None)
+        if wrapped_writes is not None:
+            forwarded = self._write_out is not None and _same_layout(
+                self._env.observation_spec(), self.observation_space
+            )
+            wrapped_writes(out if forwarded else None)
 
     def render(self) -> np.ndarray | None:
         """Returns the camera's view in the render mode chosen at construction; None for
@@ -362,7 +380,7 @@ class GymnasiumEnv(gymnasium.Env):
     def _observation(self, observation):
         if self._flat is not None:
             return self._flat(observation, out=self._out)
-        if self._out is None:
+        if self._out is None or observation is self._out:  # already written there
             return observation
         self._write_out(observation)
         return self._out

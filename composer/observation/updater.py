@@ -4,7 +4,7 @@ import functools
 import inspect
 import math
 import operator
-from collections.abc import Callable
+from collections.abc import Callable, Mapping
 from typing import NamedTuple
 
 import numpy as np
@@ -626,10 +626,25 @@ class Updater:
         if remaining > 0:
             self.update(remaining)
 
-    def get_observation(self):
-        """Returns new arrays the caller owns, in the structure of `observables`."""
+    def get_observation(self, out=None):
+        """Returns the current observations, in the structure of `observables`.
+
+        Args:
+          out: None for new arrays the caller owns; or arrays to write them into, which
+            `output_problem` accepts (not checked here, on every call).
+
+        Returns:
+          New arrays, or `out` holding the observations.
+        """
         if self._enabled_structure is None:
             self._check_reset()
+        if out is not None:
+            if not self._is_nested:
+                self._write_dict(out, *self._readers[0])
+            else:
+                for part, reader in zip(out, self._readers):
+                    self._write_dict(part, *reader)
+            return out
         if not self._is_nested:
             return self._observation_dict(*self._readers[0])
         return type(self._enabled_structure)(
@@ -647,3 +662,49 @@ class Updater:
             for name, read in zip(names, reads):
                 observation[name] = read(now)
         return observation
+
+    def _write_dict(self, out, dict_type, names, reads, storages):
+        if reads is None:
+            for name, storage in zip(names, storages):
+                out[name][...] = storage
+        else:
+            now = self._step_counter
+            for name, read in zip(names, reads):
+                out[name][...] = read(now)
+
+    def output_problem(self, out) -> str | None:
+        """Why `get_observation(out)` cannot write into `out`, or None when it can.
+
+        `out` must hold, in the structure of `observation_spec()` (the same keys, in any
+        order), a writeable NumPy array of each spec's shape and dtype.
+        """
+        spec = self.observation_spec()
+        if self._is_nested:
+            if not isinstance(out, (list, tuple)) or len(out) != len(spec):
+                return f"expected a sequence of {len(spec)} dicts of arrays, got {out!r:.80}"
+            pairs = list(zip(spec, out))
+        else:
+            pairs = [(spec, out)]
+        for spec_dict, arrays in pairs:
+            if not isinstance(arrays, Mapping) or set(arrays) != set(spec_dict):
+                keys = sorted(arrays) if isinstance(arrays, Mapping) else arrays
+                return f"expected a dict with the keys {sorted(spec_dict)}, got {keys!r:.200}"
+            for name, array_spec in spec_dict.items():
+                array = arrays[name]
+                if (
+                    not isinstance(array, np.ndarray)
+                    or array.shape != array_spec.shape
+                    or array.dtype != array_spec.dtype
+                    or not array.flags.writeable
+                ):
+                    got = (
+                        f"a{'' if array.flags.writeable else ' read-only'} {array.dtype} "
+                        f"array of shape {array.shape}"
+                        if isinstance(array, np.ndarray)
+                        else type(array).__name__
+                    )
+                    return (
+                        f"{name!r}: expected a writeable {np.dtype(array_spec.dtype)} array "
+                        f"of shape {array_spec.shape}, got {got}"
+                    )
+        return None

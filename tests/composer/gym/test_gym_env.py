@@ -231,6 +231,20 @@ def test_observations_written_to_given_arrays_are_those_a_twin_env_returns(flatt
                 np.testing.assert_array_equal(mine[name], theirs[name], err_msg=name)
 
 
+@pytest.mark.parametrize("flatten", [False, True])
+def test_the_composer_env_writes_its_observations_into_the_given_arrays_itself(flatten):
+    env = GymnasiumEnv(slider_environment(), flatten_observations=flatten)
+    out = _empty_like(env.observation_space)
+    env.write_observations_to(out)
+    env.reset(seed=0)
+    # A dict observation is copied once, by the composer env straight into `out`; a
+    # flattened one is concatenated into it by the adapter.
+    timestep = env.dm_env.step(np.ones(1))
+    assert (timestep.observation is out) is not flatten
+    env.write_observations_to(None)
+    assert env.dm_env.step(np.ones(1)).observation is not out
+
+
 def test_write_observations_to_refuses_an_array_of_another_shape_naming_its_key():
     env = GymnasiumEnv(slider_environment())
     out = {"position": np.zeros((1, 1)), "velocity": np.zeros(1)}
