@@ -1,5 +1,5 @@
-"""Test-wide set-up: headless rendering through EGL unless the user chose a backend, and a
-virtual X display for the tests that open windows."""
+"""Test-wide set-up: headless rendering through EGL unless the user chose a backend, a
+virtual X display for the tests that open windows, and recorders of compiles and resets."""
 
 import os
 import shutil
@@ -54,3 +54,36 @@ def display():
     yield f":{number}"
     server.terminate()
     server.wait()
+
+
+@pytest.fixture
+def compiles(monkeypatch) -> list:
+    """The MJCF roots compiled from now on by `mjcf.compiled_model.CompiledModel` (and so
+    by `composer.Environment`), in order."""
+    from mjcf import compiled_model
+
+    calls = []
+    original = compiled_model.compile_mjcf_model
+
+    def recording(root):
+        calls.append(root)
+        return original(root)
+
+    monkeypatch.setattr(compiled_model, "compile_mjcf_model", recording)
+    return calls
+
+
+@pytest.fixture
+def physics_resets(monkeypatch) -> list:
+    """The Physics reset afresh from now on (`Physics.reset`, not a copy of kept data)."""
+    from mujoco_physics import engine
+
+    calls = []
+    original = engine.Physics.reset
+
+    def recording(self, *args, **kwargs):
+        calls.append(self)
+        return original(self, *args, **kwargs)
+
+    monkeypatch.setattr(engine.Physics, "reset", recording)
+    return calls

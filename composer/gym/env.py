@@ -38,6 +38,7 @@ import numpy as np
 
 from composer.gym import spec_spaces
 from composer.gym.sub_env_vector import row_writer
+from composer.utils import argument_checks
 
 __all__ = ["GymnasiumEnv"]
 
@@ -103,22 +104,9 @@ def _check_out(space: gymnasium.Space, out: Any, where: str = "out") -> None:
         for key, part in space.spaces.items():
             _check_out(part, out[key], f"{where}[{key!r}]")
         return
-    if (
-        not isinstance(out, np.ndarray)
-        or out.shape != space.shape
-        or out.dtype != space.dtype
-        or not out.flags.writeable
-    ):
-        got = (
-            f"{'an' if out.flags.writeable else 'a read-only'} array of shape {out.shape} "
-            f"and dtype {out.dtype}"
-            if isinstance(out, np.ndarray)
-            else type(out).__name__
-        )
-        raise ValueError(
-            f"{where}: expected a writeable array of shape {space.shape} and dtype "
-            f"{space.dtype}, got {got}"
-        )
+    problem = argument_checks.writeable_array_problem(out, space.shape, space.dtype)
+    if problem is not None:
+        raise ValueError(f"{where}: {problem}")
 
 
 def _same_layout(observation_spec: Any, space: gymnasium.Space) -> bool:

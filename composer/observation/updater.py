@@ -12,6 +12,7 @@ from absl import logging
 from dm_env import specs
 
 from composer.observation import obs_buffer
+from composer.utils import argument_checks
 
 DEFAULT_BUFFER_SIZE = 1
 DEFAULT_UPDATE_INTERVAL = 1
@@ -690,21 +691,9 @@ class Updater:
                 keys = sorted(arrays) if isinstance(arrays, Mapping) else arrays
                 return f"expected a dict with the keys {sorted(spec_dict)}, got {keys!r:.200}"
             for name, array_spec in spec_dict.items():
-                array = arrays[name]
-                if (
-                    not isinstance(array, np.ndarray)
-                    or array.shape != array_spec.shape
-                    or array.dtype != array_spec.dtype
-                    or not array.flags.writeable
-                ):
-                    got = (
-                        f"a{'' if array.flags.writeable else ' read-only'} {array.dtype} "
-                        f"array of shape {array.shape}"
-                        if isinstance(array, np.ndarray)
-                        else type(array).__name__
-                    )
-                    return (
-                        f"{name!r}: expected a writeable {np.dtype(array_spec.dtype)} array "
-                        f"of shape {array_spec.shape}, got {got}"
-                    )
+                problem = argument_checks.writeable_array_problem(
+                    arrays[name], array_spec.shape, array_spec.dtype
+                )
+                if problem is not None:
+                    return f"{name!r}: {problem}"
         return None

@@ -9,7 +9,9 @@ import math
 import numbers
 from typing import Any
 
-__all__ = ["integer", "number"]
+import numpy as np
+
+__all__ = ["integer", "number", "writeable_array_problem"]
 
 
 def _one(argument: dict[str, Any]) -> tuple[str, Any]:
@@ -96,3 +98,26 @@ def _range(above, at_least, at_most) -> str:
         f"<= {at_most}" if at_most is not None else "",
     ]
     return " ".join(["a number", *filter(None, bounds)])
+
+
+def writeable_array_problem(value: Any, shape: tuple[int, ...], dtype: Any) -> str | None:
+    """Why `value` cannot be written into as an array of `shape` and `dtype`, or None.
+
+    Returns:
+      None for a writeable NumPy array of exactly that shape and dtype; else
+      `"expected a writeable <dtype> array of shape <shape>, got <what value is>"`.
+    """
+    dtype = np.dtype(dtype)
+    if (
+        isinstance(value, np.ndarray)
+        and value.shape == tuple(shape)
+        and value.dtype == dtype
+        and value.flags.writeable
+    ):
+        return None
+    if isinstance(value, np.ndarray):
+        kind = "" if value.flags.writeable else " read-only"
+        got = f"a{kind} {value.dtype} array of shape {value.shape}"
+    else:
+        got = type(value).__name__
+    return f"expected a writeable {dtype} array of shape {tuple(shape)}, got {got}"

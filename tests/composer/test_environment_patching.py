@@ -30,18 +30,6 @@ class VariedTask(ReachTask):
         random_state.uniform()
 
 
-def _count_compiles(monkeypatch) -> list:
-    calls = []
-    original = compiled_model.compile_mjcf_model
-
-    def counting(root):
-        calls.append(root)
-        return original(root)
-
-    monkeypatch.setattr(compiled_model, "compile_mjcf_model", counting)
-    return calls
-
-
 def test_twenty_seeded_episodes_are_bit_identical_with_patching_on_and_off():
     patched_env = composer.Environment(VariedTask(), random_state=3)
     compiled_env = composer.Environment(VariedTask(), random_state=3, patch_compiled_model=False)
@@ -52,9 +40,9 @@ def test_twenty_seeded_episodes_are_bit_identical_with_patching_on_and_off():
 
 
 @pytest.mark.patch_table
-def test_a_reset_that_changes_only_patchable_values_does_not_compile(monkeypatch):
+def test_a_reset_that_changes_only_patchable_values_does_not_compile(monkeypatch, compiles):
     env = composer.Environment(VariedTask(), random_state=3)
-    compiles = _count_compiles(monkeypatch)
+    compiles.clear()  # counts from here on
     for _ in range(5):
         env.reset()
     assert compiles == []
@@ -78,18 +66,18 @@ def test_patched_values_are_what_bind_reads_and_survive_episode_writes():
     )
 
 
-def test_turning_patching_off_recompiles_every_changed_model(monkeypatch):
+def test_turning_patching_off_recompiles_every_changed_model(monkeypatch, compiles):
     env = composer.Environment(VariedTask(), random_state=3, patch_compiled_model=False)
-    compiles = _count_compiles(monkeypatch)
+    compiles.clear()  # counts from here on
     for _ in range(3):
         env.reset()
     assert len(compiles) == 3
 
 
-def test_a_change_that_is_not_patchable_recompiles(monkeypatch):
+def test_a_change_that_is_not_patchable_recompiles(monkeypatch, compiles):
     task = VariedTask()
     env = composer.Environment(task, random_state=3)
-    compiles = _count_compiles(monkeypatch)
+    compiles.clear()  # counts from here on
     task.box.geom.pos = [0.01, 0, 0]
     env.reset()
     assert len(compiles) == 1
@@ -137,7 +125,7 @@ class BrickTask(ReachTask):
 
 @pytest.mark.patch_table
 def test_a_default_class_cylinder_radius_drawn_every_episode_patches_bit_identically(
-    monkeypatch,
+    monkeypatch, compiles
 ):
     outcomes = []
     update = compiled_model.CompiledModel.update
@@ -153,7 +141,7 @@ def test_a_default_class_cylinder_radius_drawn_every_episode_patches_bit_identic
     assert_same_episodes(patched, compiled)
     # Both constructions come first, then the patched environment's 20 resets.
     assert outcomes[2:22] == [compiled_model.ModelUpdate.PATCHED] * 20
-    compiles = _count_compiles(monkeypatch)
+    compiles.clear()  # counts from here on
     for _ in range(3):
         patched_env.reset()
     assert compiles == []

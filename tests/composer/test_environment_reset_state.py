@@ -5,7 +5,6 @@ import pytest
 from composer_scene import ReachTask, assert_same_episodes, play_episodes
 
 import composer
-from mujoco_physics import engine
 
 # What the first forward of a reset computes, read by the task before it sets the state.
 _READ_AT_RESET = ("qacc", "efc_force", "xpos", "sensordata")
@@ -52,18 +51,6 @@ class RecordingTask(ReachTask):
         super().initialize_episode(physics, random_state)
 
 
-def _count_physics_resets(monkeypatch) -> list:
-    calls = []
-    original = engine.Physics.reset
-
-    def counting(self, *args, **kwargs):
-        calls.append(self)
-        return original(self, *args, **kwargs)
-
-    monkeypatch.setattr(engine.Physics, "reset", counting)
-    return calls
-
-
 @pytest.mark.patch_table
 @pytest.mark.parametrize("vary_contacts", [False, True])
 def test_resets_read_and_play_as_resets_that_recompile(vary_contacts):
@@ -80,24 +67,26 @@ def test_resets_read_and_play_as_resets_that_recompile(vary_contacts):
 
 
 @pytest.mark.patch_table
-def test_when_only_colours_change_resets_copy_the_data_instead_of_a_forward(monkeypatch):
+def test_when_only_colours_change_resets_copy_the_data_instead_of_a_forward(
+    monkeypatch, physics_resets
+):
     env = composer.Environment(RecordingTask(vary_contacts=False), random_state=5)
     env.reset()
     env.reset()  # the data is kept from a model's second reset on
-    resets = _count_physics_resets(monkeypatch)
+    physics_resets.clear()  # counts from here on
     for _ in range(4):
         env.reset()
-    assert resets == []
+    assert physics_resets == []
 
 
 @pytest.mark.patch_table
-def test_a_change_that_forward_reads_resets_afresh(monkeypatch):
+def test_a_change_that_forward_reads_resets_afresh(monkeypatch, physics_resets):
     env = composer.Environment(RecordingTask(vary_contacts=True), random_state=5)
     env.reset()
-    resets = _count_physics_resets(monkeypatch)
+    physics_resets.clear()  # counts from here on
     for _ in range(4):
         env.reset()
-    assert len(resets) == 4
+    assert len(physics_resets) == 4
 
 
 class SoftensAfterCompile(RecordingTask):
@@ -108,16 +97,16 @@ class SoftensAfterCompile(RecordingTask):
         physics.bind(ground).solref = [random_state.uniform(0.02, 0.2), 1.0]
 
 
-def test_an_after_compile_hook_makes_every_reset_start_afresh(monkeypatch):
+def test_an_after_compile_hook_makes_every_reset_start_afresh(monkeypatch, physics_resets):
     env = composer.Environment(SoftensAfterCompile(vary_contacts=False), random_state=5)
     compiled = composer.Environment(
         SoftensAfterCompile(vary_contacts=False), random_state=5, patch_compiled_model=False
     )
     play_episodes(compiled, 6, 5, seed=1)
-    resets = _count_physics_resets(monkeypatch)
+    physics_resets.clear()  # counts from here on
     play_episodes(env, 6, 5, seed=1)
     # Per episode: the reset context the hooks run in (as in dm_control), and the episode's.
-    assert len(resets) == 2 * 6
+    assert len(physics_resets) == 2 * 6
     assert env.task.records == env.task.fresh_records == compiled.task.records
 
 

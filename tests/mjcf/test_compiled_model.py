@@ -6,7 +6,6 @@ import pytest
 import mjcf
 from mjcf import compiled_model
 from mjcf.compiled_model import CompiledModel, ModelUpdate
-from mujoco_physics import engine
 
 _SCENE = """
 <mujoco>
@@ -29,33 +28,6 @@ def _updated(root, **kwargs) -> CompiledModel:
     model = CompiledModel(**kwargs)
     assert model.update(root) is ModelUpdate.NEW_PHYSICS
     return model
-
-
-@pytest.fixture
-def compiles(monkeypatch) -> list:
-    calls = []
-    original = compiled_model.compile_mjcf_model
-
-    def counting(root):
-        calls.append(root)
-        return original(root)
-
-    monkeypatch.setattr(compiled_model, "compile_mjcf_model", counting)
-    return calls
-
-
-@pytest.fixture
-def resets(monkeypatch) -> list:
-    """The Physics that were reset afresh (not by copying kept data)."""
-    calls = []
-    original = engine.Physics.reset
-
-    def counting(self, *args, **kwargs):
-        calls.append(self)
-        return original(self, *args, **kwargs)
-
-    monkeypatch.setattr(engine.Physics, "reset", counting)
-    return calls
 
 
 def _reset(model: CompiledModel) -> None:
@@ -173,68 +145,68 @@ def test_physics_before_the_first_update_and_after_close_names_the_fix():
     assert model.update(root) is ModelUpdate.NEW_PHYSICS
 
 
-def _model_with_kept_reset(root, resets, **kwargs) -> CompiledModel:
-    """A model whose last reset kept its data: resets of a model keep data from the
+def _model_with_kept_reset(root, physics_resets, **kwargs) -> CompiledModel:
+    """A model whose last reset kept its data: physics_resets of a model keep data from the
     second on."""
     model = _updated(root, **kwargs)
     _reset(model)
     assert model.update(root) is ModelUpdate.RESTORED
     _reset(model)
-    assert len(resets) == 2
+    assert len(physics_resets) == 2
     return model
 
 
-def test_a_reset_after_a_restore_copies_the_last_resets_data(resets):
+def test_a_reset_after_a_restore_copies_the_last_resets_data(physics_resets):
     root = _root()
-    model = _model_with_kept_reset(root, resets)
+    model = _model_with_kept_reset(root, physics_resets)
     model.physics.data.qpos[:] = 3.0
     assert model.update(root) is ModelUpdate.RESTORED
     _reset(model)
-    assert len(resets) == 2
+    assert len(physics_resets) == 2
     np.testing.assert_array_equal(model.physics.data.qpos, [0, 0, 0.5, 1, 0, 0, 0])
 
 
-def test_a_reset_after_a_colour_patch_copies_the_last_resets_data(resets):
+def test_a_reset_after_a_colour_patch_copies_the_last_resets_data(physics_resets):
     root = _root()
-    model = _model_with_kept_reset(root, resets)
+    model = _model_with_kept_reset(root, physics_resets)
     root.find("geom", "ball").rgba = [0, 1, 0, 1]
     assert model.update(root) is ModelUpdate.PATCHED
     _reset(model)
-    assert len(resets) == 2
+    assert len(physics_resets) == 2
 
 
-def test_a_reset_after_a_patch_that_forward_reads_is_afresh(resets):
+def test_a_reset_after_a_patch_that_forward_reads_is_afresh(physics_resets):
     root = _root()
-    model = _model_with_kept_reset(root, resets)
+    model = _model_with_kept_reset(root, physics_resets)
     root.find("geom", "floor").friction = [0.5, 0.005, 0.0001]
     assert model.update(root) is ModelUpdate.PATCHED
     _reset(model)
-    assert len(resets) == 3
+    assert len(physics_resets) == 3
 
 
 @pytest.mark.parametrize("patch", [True, False])
-def test_a_reset_after_a_load_is_afresh(resets, patch):
+def test_a_reset_after_a_load_is_afresh(physics_resets, patch):
     root = _root()
-    model = _model_with_kept_reset(root, resets, patch=patch)
+    model = _model_with_kept_reset(root, physics_resets, patch=patch)
     root.find("body", "ball").pos = [0, 0, 0.7]
     assert model.update(root) is ModelUpdate.LOADED
     _reset(model)
-    assert len(resets) == 3
+    assert len(physics_resets) == 3
 
 
-def test_a_reset_after_model_may_have_changed_is_afresh(resets):
+def test_a_reset_after_model_may_have_changed_is_afresh(physics_resets):
     root = _root()
-    model = _model_with_kept_reset(root, resets)
+    model = _model_with_kept_reset(root, physics_resets)
     assert model.update(root) is ModelUpdate.RESTORED
     model.model_may_have_changed()
     _reset(model)
-    assert len(resets) == 3
+    assert len(physics_resets) == 3
 
 
-def test_a_reset_after_close_and_update_is_afresh(resets):
+def test_a_reset_after_close_and_update_is_afresh(physics_resets):
     root = _root()
-    model = _model_with_kept_reset(root, resets)
+    model = _model_with_kept_reset(root, physics_resets)
     model.close()
     model.update(root)
     _reset(model)
-    assert len(resets) == 3
+    assert len(physics_resets) == 3

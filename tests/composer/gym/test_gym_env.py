@@ -249,7 +249,7 @@ def test_write_observations_to_refuses_an_array_of_another_shape_naming_its_key(
     env = GymnasiumEnv(slider_environment())
     out = {"position": np.zeros((1, 1)), "velocity": np.zeros(1)}
     with pytest.raises(
-        ValueError, match=r"out\['velocity'\]: expected a writeable array of shape \(1, 1\)"
+        ValueError, match=r"out\['velocity'\]: expected a writeable float64 array of shape \(1, 1\)"
     ):
         env.write_observations_to(out)
 

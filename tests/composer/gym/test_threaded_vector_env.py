@@ -137,6 +137,27 @@ def test_disabled_autoreset_needs_a_masked_reset_before_stepping_again():
     envs.close()
 
 
+def _assert_steps_match(ours, reference, mode, action, assert_observations) -> None:
+    """Steps both vector envs 7 times with `action` (resetting the finished sub-envs
+    first where autoreset is DISABLED) and asserts the same results at each step."""
+    for _ in range(7):
+        if mode is AutoresetMode.DISABLED:
+            done = reference._terminations | reference._truncations
+            if done.any():
+                expected = reference.reset(options={"reset_mask": done.copy()})
+                got = ours.reset(options={"reset_mask": done.copy()})
+                assert_observations(got[0], expected[0])
+        got, expected = ours.step(action), reference.step(action)
+        assert_observations(got[0], expected[0])
+        for mine, theirs in zip(got[1:4], expected[1:4]):
+            np.testing.assert_array_equal(mine, theirs)
+        assert got[4].keys() == expected[4].keys()
+        if "final_obs" in expected[4]:
+            np.testing.assert_array_equal(got[4]["_final_obs"], expected[4]["_final_obs"])
+            for i in np.flatnonzero(expected[4]["_final_obs"]):
+                assert_observations(got[4]["final_obs"][i], expected[4]["final_obs"][i])
+
+
 @pytest.mark.parametrize("mode", list(AutoresetMode))
 def test_every_autoreset_mode_matches_gymnasiums_sync_vector_env(mode):
     lengths = [1, 2, 3, 2]
@@ -144,18 +165,7 @@ def test_every_autoreset_mode_matches_gymnasiums_sync_vector_env(mode):
     reference = SyncVectorEnv(_counters(lengths), autoreset_mode=mode)
     for envs in (ours, reference):
         envs.reset(seed=5)
-    for _ in range(7):
-        if mode is AutoresetMode.DISABLED:
-            done = reference._terminations | reference._truncations
-            if done.any():
-                expected = reference.reset(options={"reset_mask": done.copy()})
-                got = ours.reset(options={"reset_mask": done.copy()})
-                np.testing.assert_array_equal(got[0], expected[0])
-        got = ours.step(np.zeros((4, 1)))
-        expected = reference.step(np.zeros((4, 1)))
-        for mine, theirs in zip(got[:4], expected[:4]):
-            np.testing.assert_array_equal(mine, theirs)
-        assert got[4].keys() == expected[4].keys()
+    _assert_steps_match(ours, reference, mode, np.zeros((4, 1)), np.testing.assert_array_equal)
     ours.close()
 
 
@@ -177,22 +187,8 @@ def test_gymnasium_env_sub_envs_writing_into_their_rows_match_sync_vector_env(mo
     ours = ThreadedVectorEnv(_sliders(lengths), 2, autoreset_mode=mode, copy=False)
     reference = SyncVectorEnv(_sliders(lengths), autoreset_mode=mode)
     _assert_same_observations(ours.reset(seed=5)[0], reference.reset(seed=5)[0])
-    for _ in range(7):
-        if mode is AutoresetMode.DISABLED:
-            done = reference._terminations | reference._truncations
-            if done.any():
-                expected = reference.reset(options={"reset_mask": done.copy()})
-                got = ours.reset(options={"reset_mask": done.copy()})
-                _assert_same_observations(got[0], expected[0])
-        action = np.full((4, 1), 0.5)
-        got, expected = ours.step(action), reference.step(action)
-        _assert_same_observations(got[0], expected[0])
-        for mine, theirs in zip(got[1:4], expected[1:4]):
-            np.testing.assert_array_equal(mine, theirs)
-        if "final_obs" in expected[4]:
-            np.testing.assert_array_equal(got[4]["_final_obs"], expected[4]["_final_obs"])
-            for i in np.flatnonzero(expected[4]["_final_obs"]):
-                _assert_same_observations(got[4]["final_obs"][i], expected[4]["final_obs"][i])
+    action = np.full((4, 1), 0.5)
+    _assert_steps_match(ours, reference, mode, action, _assert_same_observations)
     ours.close()
 
 
