@@ -1,7 +1,7 @@
 """Checks that a seed gives dm_control's episode: the project against dm_control 1.0.50.
 
 Usage: `python -m tools.dm_control_seeds [--seeds 5] [--steps 10] [--only ENV,...]
-[--no-mujoco4]`
+[--mujoco4]`
 
 Runs `tools/seed_episode_runner.py` in two scratch venvs under `.cache/dm_control_seeds`,
 both with dm_control 1.0.50 on mujoco 3.17: `reference` runs dm_control as it is, and
@@ -16,11 +16,11 @@ For every environment and seed it compares:
   actions, within 1e-6.
 
 It prints one row per environment, with its first differing quantity, and exits 1 when
-any differs. Unless `--no-mujoco4`, it then runs the project side again on mujoco 4 (the
-venv of `tools.dm_control_conformance`, whose dm_control is the same release) and reports
-the largest differences from the reference on 3.17, without failing: there only MuJoCo's
-numerics may differ, so the draws must still be the same. The sides run at the same time,
-each in a process of its own.
+any differs. With `--mujoco4`, it also runs the project side on mujoco 4 (the venv of
+`tools.dm_control_conformance`, whose dm_control is the same release) and reports the
+largest differences from the reference on 3.17, without failing: there only MuJoCo's
+numerics may differ, so the draws must still be the same (CI leaves this report out: it
+cannot fail). The sides run at the same time, each in a process of its own.
 """
 
 from __future__ import annotations
@@ -195,7 +195,11 @@ def main() -> int:
     parser.add_argument("--seeds", type=int, default=5)
     parser.add_argument("--steps", type=int, default=10)
     parser.add_argument("--only", default="", help="comma-separated environment names")
-    parser.add_argument("--no-mujoco4", action="store_true")
+    parser.add_argument(
+        "--mujoco4",
+        action="store_true",
+        help="also report the project's differences on mujoco 4 (never fails)",
+    )
     args = parser.parse_args()
     CACHE.mkdir(parents=True, exist_ok=True)
     reference_python = scratch_venv.ensure_venv(
@@ -207,7 +211,7 @@ def main() -> int:
         start_side(reference_python, "reference", args.seeds, args.steps, args.only),
         start_side(project_python, "project", args.seeds, args.steps, args.only),
     ]
-    if not args.no_mujoco4:
+    if args.mujoco4:
         newest_python = dm_control_conformance.ensure_conformance_venv()
         sides.append(start_side(newest_python, "project", args.seeds, args.steps, args.only))
     reference, project, *newest = [finish_side(*side) for side in sides]

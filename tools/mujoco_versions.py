@@ -14,7 +14,8 @@ up, the floor version itself, and the newest release below the floor, where impo
 project must fail with the ImportError that names both versions. `--releases` picks some:
 `floor`, `newest`, `below-floor`, a minor (`3.3`, its newest patch) or an exact
 version (`3.3.0`). With `--strict` the exit status is 1 when a release has a failing test
-or its install or test run breaks.
+or its install or test run breaks. `--skip-installed` leaves out the release that the running
+Python already has (CI's main run proved and tested it), saying so.
 """
 
 from __future__ import annotations
@@ -143,6 +144,16 @@ def pick(
                 "or a pip version"
             )
     return picked
+
+
+def without_installed(releases: list[Release], installed: str) -> list[Release]:
+    """`releases` less the one whose version is `installed`; prints that it is left out."""
+    kept = [release for release in releases if release.version != installed]
+    if len(kept) < len(releases):
+        print(
+            f"mujoco {installed}: left out, it is the release this Python runs (--skip-installed)"
+        )
+    return kept
 
 
 def _run(args: list[str], log, **kwargs) -> int:
@@ -315,6 +326,11 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument(
         "--strict", action="store_true", help="exit 1 when any release has a failure"
     )
+    parser.add_argument(
+        "--skip-installed",
+        action="store_true",
+        help="leave out the release installed where this command runs (tested there already)",
+    )
     parser.add_argument("pytest_args", nargs="*", help="extra arguments for pytest (after --)")
     args = parser.parse_args(argv)
     versions = available_versions()
@@ -325,6 +341,10 @@ def main(argv: list[str] | None = None) -> int:
     else:
         extra = ["below-floor"] + ([] if floor in {r.version for r in releases} else ["floor"])
         releases = pick(releases, versions, extra, floor) + releases
+    if args.skip_installed:
+        import mujoco
+
+        releases = without_installed(releases, mujoco.__version__)
     outcomes = []
     for release in releases:
         print(f"mujoco {release.version}: installing and testing ...", flush=True)

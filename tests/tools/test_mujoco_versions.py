@@ -37,6 +37,15 @@ def test_picking_a_release_pip_does_not_offer_names_the_choices():
         mujoco_versions.pick(releases, _PIP_VERSIONS, ["3.9"], "3.3.0")
 
 
+def test_skip_installed_leaves_out_only_the_running_release(capsys):
+    releases = mujoco_versions.supported_releases(_PIP_VERSIONS, "3.3.0")
+    picked = mujoco_versions.pick(releases, _PIP_VERSIONS, ["floor", "3.17", "newest"], "3.3.0")
+    kept = mujoco_versions.without_installed(picked, "4.0.0")
+    assert [r.version for r in kept] == ["3.3.0", "3.17.0"]
+    assert "mujoco 4.0.0: left out" in capsys.readouterr().out
+    assert mujoco_versions.without_installed(picked, "4.1.0") == picked
+
+
 def test_summary_line_counts_errors_as_failures():
     output = (
         "...\nFAILED tests/x.py::t\n2 failed, 1713 passed, 3 skipped, 1 error, 1 warning in 23s\n"
