@@ -1,6 +1,7 @@
 """`composer.batch.equivalence`, the check users run on their own task, on reach_site: it
 passes on the real batched task and names the quantity, step and world of a difference
-put in on purpose."""
+put in on purpose, and tells the batch's difference from the task's own sensitivity to
+float32 rounding."""
 
 import contextlib
 import io
@@ -52,6 +53,7 @@ class _PushedAtStep4(manipulation_batch.BatchReach):
 def test_reach_site_batch_stays_within_the_float32_bound_of_the_cpu_environment():
     report = equivalence.compare(make_reach, num_envs=2, control_steps=10, factors=_reach_factors())
     assert report.passed, str(report)
+    assert report.rounded_cpu_first is None
     assert report.seeds == (0, 1)
     assert 0.0 < report.worst["qpos"] < 1.0
 
@@ -65,6 +67,8 @@ def test_a_difference_put_in_is_named_by_quantity_step_world_and_joint():
     assert (first.quantity, first.step, first.world) == ("qpos", 4, 1)
     assert first.element == "jaco_arm/joint_1"
     assert abs(first.got - first.expected) > first.bound > 0
+    # C MuJoCo rounded to float32 stays within the bound: the difference is the batch's.
+    assert report.rounded_cpu_first is None
 
 
 def test_command_line_reports_the_torques_that_need_their_servo_gain():
