@@ -19,8 +19,10 @@ minute with a warm kernel cache). Prints three tables:
    float64 and float32 from the same pose, and in float32 with the rim offset's normal
    component taken from a cross product instead of `axis_z**2 - 1`.
 
-The model is the push-puck scene of docs/batch_own_task.md, written here as XML: a sphere
-pusher on two slide joints driven by velocity servos, a free cylinder puck on a plane.
+The model, written here as XML, is a push-puck scene like issue 43's: a sphere pusher on
+two slide joints driven by velocity servos strikes a free cylinder puck (the size of
+docs/own_task.md's) resting on a plane. Its findings are in docs/batch_own_task.md
+("Contact parity after an impact") and docs/reports/mujoco_warp_plane_cylinder.md.
 """
 
 import mujoco
