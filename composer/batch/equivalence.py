@@ -24,8 +24,10 @@ errors its distance adds up (2 for the distance between two points).
 
 The bound holds between discrete events (a contact starting, a joint leaving its limit),
 not always across them: an impact amplifies the float32 error, and an event can fall in
-another physics step in float32 than in float64. A report that names a step right after
-an impact says that, not necessarily that the batch is wrong (docs: "Batch your own task").
+another physics step in float32 than in float64. So `compare` also runs CPU environments
+whose state is rounded to float32 after every control step: where they leave the bound as
+well (`EquivalenceReport.rounded_cpu_first`), the task itself amplifies rounding there, and
+the batch's difference says nothing against it (docs: "Batch your own task").
 """
 
 import argparse
@@ -41,6 +43,7 @@ import numpy as np
 import composer
 from composer.batch.environment import BatchEnvironment
 from composer.batch.task import BatchTask
+from composer.utils import argument_checks
 
 __all__ = [
     "EPS",
@@ -237,8 +240,8 @@ def compare(
     dtype is an integer or bool.
 
     Args:
-      task_factory: returns a new CPU task; called once per CPU environment and once for
-        the batch.
+      task_factory: returns a new CPU task; called twice per world (the CPU environment
+        and its float32-rounded twin) and once for the batch.
       num_envs: the worlds (and CPU environments) to compare.
       control_steps: the steps after the reset.
       seed: world i's seed is `seed + i`; the default actions are drawn from it too.
@@ -256,8 +259,11 @@ def compare(
       An `EquivalenceReport`; `report.first` names the first value outside its bound.
 
     Raises:
-      ValueError: for `actions` of the wrong shape or a bad argument, named.
+      ValueError: for `actions` of the wrong shape, `num_envs` below 1 or `control_steps`
+        below 0, named.
     """
+    argument_checks.integer(num_envs=num_envs)
+    argument_checks.integer(0, control_steps=control_steps)
     factors = dict(factors or {})
     seeds = tuple(seed + i for i in range(num_envs))
 
