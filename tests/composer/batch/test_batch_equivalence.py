@@ -6,13 +6,9 @@ float32 tolerance of CPU environment i for 20 control steps, for every batched t
 worlds whose episodes end at different steps each start their next episode on their own,
 as the CPU environments do. Integer-valued observations ('desired_order') match exactly.
 
-The tolerances, derived rather than fitted to this test: Warp computes in float32 (machine
-epsilon EPS), C MuJoCo in float64, so each physics step adds a rounding error of order EPS
-relative to the state; uncorrelated, these errors grow like sqrt(N) over N physics steps.
-The issue measured 1.2e-6 on lift_brick's qpos after 21 physics steps, that is
-22 * sqrt(21) * EPS, the constant that the conditioning of the arm's dynamics puts in front;
-rounded up to STATE_FACTOR = 32, a state quantity (positions, angles, rotations, velocities)
-is allowed `STATE_FACTOR * sqrt(N) * EPS` times its magnitude (at least 1). Joint torques
+The tolerances are `composer.batch.equivalence`'s, derived in its module docstring: a state
+quantity (positions, angles, rotations, velocities) may be `state_tolerance(N)` times its
+magnitude (at least 1) off after N physics steps. Joint torques
 are the velocity servos' output, kv * (ctrl - qvel) plus constraint forces, so their error is
 the velocity error times the largest servo gain kv. Rewards change at most as fast as their
 sigmoid's steepest slope times the error of the distance or height they are computed from:
@@ -51,6 +47,7 @@ import pytest
 import composer
 import mjcf
 from composer.batch import BatchEnvironment, BatchTimeStep
+from composer.batch.equivalence import bound, state_tolerance
 from manipulation import batch as manipulation_batch
 from manipulation.props import Duplo2x4
 from manipulation.tasks import observation_settings, registry
@@ -63,8 +60,6 @@ pytestmark = pytest.mark.warp
 NUM_ENVS = 4
 SEEDS = (101, 202, 303, 404)
 CONTROL_STEPS = 20
-EPS = float(np.finfo(np.float32).eps)
-STATE_FACTOR = 32.0
 # The highest seat of the seated tasks (a brick on a brick; the cradle's is lower), in m.
 _SEAT_HEIGHT = Duplo2x4.HEIGHT
 
@@ -86,10 +81,6 @@ _KNOWN_DIFFERENCES = {
     "reassemble_3_bricks_fixed_order_features": _SETTLING_TOWER,
     "reassemble_5_bricks_random_order_features": _SETTLING_TOWER,
 }
-
-
-def _state_tolerance(physics_steps: int) -> float:
-    return STATE_FACTOR * math.sqrt(max(physics_steps, 1)) * EPS
 
 
 def _gaussian_slope(margin: float) -> float:
@@ -122,7 +113,7 @@ def _max_servo_gain(env: composer.Environment) -> float:
 
 
 def _assert_world_matches(batch_step, cpu_steps, physics_steps, name, kv):
-    state_tolerance = _state_tolerance(physics_steps)
+    reward_factor = _distance_error_factor(name) * _reward_slope(name)
     for world, cpu in enumerate(cpu_steps):
         assert int(batch_step.step_type[world]) == int(cpu.step_type), f"world {world}"
         for key, expected in cpu.observation.items():
@@ -131,13 +122,13 @@ def _assert_world_matches(batch_step, cpu_steps, physics_steps, name, kv):
             if key == "desired_order":
                 np.testing.assert_array_equal(got, expected, err_msg=f"world {world}")
                 continue
-            scale = np.maximum(1.0, np.abs(expected))
-            tolerance = state_tolerance * scale * (kv if key.endswith("joints_torque") else 1.0)
+            factor = kv if key.endswith("joints_torque") else 1.0
+            tolerance = bound(expected, physics_steps, factor)
             np.testing.assert_array_less(
                 np.abs(got - expected), tolerance, err_msg=f"world {world}, {key!r}"
             )
         if cpu.reward is not None:
-            reward_tolerance = _distance_error_factor(name) * state_tolerance * _reward_slope(name)
+            reward_tolerance = bound(cpu.reward, physics_steps, reward_factor)
             assert abs(batch_step.reward[world] - cpu.reward) <= reward_tolerance, f"world {world}"
 
 
@@ -355,7 +346,7 @@ def _assert_batch_rewards(name, seeds, states, expected):
     batch_env.physics.data.qpos[...] = np.array(states)
     batch_env.physics.forward()
     got = batch_env.task.get_reward(batch_env.physics)
-    tolerance = _distance_error_factor(name) * _state_tolerance(1) * _reward_slope(name)
+    tolerance = _distance_error_factor(name) * state_tolerance(1) * _reward_slope(name)
     np.testing.assert_allclose(got, expected, rtol=0.0, atol=tolerance)
     batch_env.close()
 

@@ -32,3 +32,20 @@ def test_unregistered_task_is_refused_with_the_way_to_register_one():
 def test_num_envs_must_be_a_positive_int(num_envs):
     with pytest.raises(ValueError, match=r"num_envs: expected an integer >= 1, got"):
         composer.batch.BatchEnvironment(composer.NullTask(composer.Arena()), num_envs)
+
+
+@pytest.mark.parametrize(
+    "argument, message",
+    [
+        ({"num_envs": 0}, "num_envs: expected an integer >= 1, got 0"),
+        ({"control_steps": -1}, "control_steps: expected an integer >= 0, got -1"),
+    ],
+)
+def test_equivalence_check_refuses_bad_counts_before_building_anything(argument, message):
+    from composer.batch import equivalence
+
+    def never_called():
+        raise AssertionError("the task was built")
+
+    with pytest.raises(ValueError, match=message):
+        equivalence.compare(never_called, **argument)
