@@ -15,7 +15,7 @@ SCREEN = (1024, 768)
 
 def pytest_collection_modifyitems(config, items):
     # The checked-in patch table is proven on one MuJoCo release; on another it does not
-    # apply (a proof cached by `python -m mjcf.patch_proof` may), so what it promises is
+    # apply (a proof cached by `python -m manipulation.patch_proof` may), so what it promises is
     # not there to check.
     import mujoco
 
