@@ -74,7 +74,9 @@ class Environment(dm_env.Environment):
       time_limit: seconds of simulated time after which an episode ends (LAST, with
         the task's discount): the first step that reaches it is the last. A time limit
         that is not a multiple of the control timestep gives a `UserWarning` once (and
-        again if the control timestep changes).
+        again if the control timestep changes), except under the dm_control redirect
+        (`composer.dm_control_compat`), where code written for dm_control, which says
+        nothing, sets such limits (its locomotion examples: 25 s every 0.03 s).
       random_state: an int seed or an `np.random.RandomState`; every hook gets it.
       n_sub_steps: physics steps per control step, overriding the task's
         `physics_steps_per_control_step`.
@@ -214,9 +216,14 @@ class Environment(dm_env.Environment):
         return self._task.control_timestep
 
     def _warn_if_time_limit_is_not_whole_steps(self) -> None:
-        """Warns, once per control timestep, when the time limit falls between two steps."""
+        """Warns, once per control timestep, when the time limit falls between two steps
+        (not under the dm_control redirect: see the class docstring)."""
+        # Imported here: `python -m composer.dm_control_compat` must find that module not yet
+        # imported when the `composer` package is.
+        from composer import dm_control_compat
+
         control_timestep = self.control_timestep()
-        if control_timestep == self._time_limit_checked_for:
+        if control_timestep == self._time_limit_checked_for or dm_control_compat.installed():
             return
         self._time_limit_checked_for = control_timestep
         message = _time_limit_warning(self._time_limit, control_timestep)

@@ -16,6 +16,7 @@ from mjcf.attribute_types import (
     File,
     Identifier,
     Keyword,
+    NamePrefix,
     Number,
     Reference,
     String,
@@ -374,7 +375,8 @@ _BY_ELEMENT: dict[str, dict[str, AttributeType]] = {
     "mesh": {"builtin": _STRING},
     "position": {"timeconst": _FLOAT},
     "cylinder": {"timeconst": _FLOAT},
-    "attach": {"*": _STRING},
+    # The sub-model (an `<asset><model>`) to copy from, and the prefix of the copies' names.
+    "attach": {"*": _STRING, "model": Reference("model"), "prefix": NamePrefix()},
     "flex": {"body": _STRING, "node": _STRING},
     "layer": {"role": _STRING},
     "tactile": {"geom": Reference("geom"), "mesh": Reference("mesh")},

@@ -15,6 +15,7 @@ IDENTIFIER = 1
 REFERENCE = 2
 FILE = 3
 OTHER = 4
+NAME_PREFIX = 5
 
 
 def format_float(value: float, precision: int, zero_threshold: float) -> str:
@@ -93,6 +94,15 @@ class String(AttributeType):
 
     __slots__ = ()
     kind = STRING
+
+
+class NamePrefix(String):
+    """Text MuJoCo puts before the names it copies in (`<attach prefix>`): written after the
+    scope prefix of the model that holds it, so that a model attached twice names each
+    copy's copies apart."""
+
+    __slots__ = ()
+    kind = NAME_PREFIX
 
 
 class Identifier(AttributeType):

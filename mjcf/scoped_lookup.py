@@ -2,7 +2,11 @@
 
 from __future__ import annotations
 
+import functools
 from typing import TYPE_CHECKING
+
+import mujoco
+from lxml import etree
 
 from mjcf import constants
 from mjcf.asset import Asset
@@ -12,6 +16,7 @@ if TYPE_CHECKING:
 
 _SEP = constants.PREFIX_SEPARATOR
 _WORLD = "world"
+_SUB_MODEL = "model"
 
 
 def split_identifier(identifier: str) -> tuple[str, str | None]:
@@ -59,6 +64,8 @@ def lookup(root: RootElement, namespace: str, identifier: str) -> Element | None
         return root.worldbody
     if found is None and namespace in constants.ASSETS_NAMED_AFTER_FILE:
         found = _unnamed_asset_by_file(root, namespace, identifier)
+    if found is None and namespace == _SUB_MODEL:
+        found = _unnamed_sub_model(root, identifier)
     return found
 
 
@@ -81,3 +88,29 @@ def _unnamed_asset_by_file(root: RootElement, namespace: str, stem: str) -> Elem
         if isinstance(asset, Asset) and asset.prefix == stem:
             return child
     return None
+
+
+def _unnamed_sub_model(root: RootElement, name: str) -> Element | None:
+    """MuJoCo names an unnamed `<asset><model file>` after the model in the file: its
+    `<mujoco model>`, or MuJoCo's default model name where that is unset."""
+    section = root._singleton_if_present("asset")
+    if section is None:
+        return None
+    for child in section._children:
+        if child._spec.name != _SUB_MODEL or "name" in child._attributes:
+            continue
+        asset = child._attributes.get("file")
+        if isinstance(asset, Asset) and _sub_model_name(asset.contents) == name:
+            return child
+    return None
+
+
+@functools.lru_cache(maxsize=64)
+def _sub_model_name(contents: bytes) -> str:
+    """The name MuJoCo gives the model of MJCF text `contents`."""
+    return etree.fromstring(contents).get("model") or _default_model_name()
+
+
+@functools.cache
+def _default_model_name() -> str:
+    return mujoco.MjSpec().modelname

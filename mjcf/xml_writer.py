@@ -51,6 +51,7 @@ _IDENTIFIER = attribute_types.IDENTIFIER
 _OTHER = attribute_types.OTHER
 _REFERENCE = attribute_types.REFERENCE
 _FILE = attribute_types.FILE
+_NAME_PREFIX = attribute_types.NAME_PREFIX
 _FULL_PRECISION = (17, 0)
 _DEFAULT = constants.DEFAULT
 _JOINT = constants.JOINT
@@ -385,6 +386,8 @@ class _Writer:
                             self.assets.update(value.dependencies)
                         value = filename
                     head += f' {name}="{_escape(value)}"'
+                elif kind == _NAME_PREFIX:
+                    head += f' {name}="{_escape(prefix + value)}"'
         head += name_text
         inherited = dclass
         if spec.sets_childclass:
@@ -832,6 +835,8 @@ def attribute_string(element: Element, spec, prefix_root) -> str | None:
         return writer.resolve(element, spec.name, value, value_type)
     if kind == _FILE:
         return value.get_vfs_filename() if isinstance(value, Asset) else value
+    if kind == _NAME_PREFIX:
+        return writer.prefix_of(element._root) + value
     return value_type.format(value, 17, 0)
 
 

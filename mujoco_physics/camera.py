@@ -1,9 +1,11 @@
 """dm_control's cameras on a Physics: `Camera` (a fixed or free camera that renders, projects
 and selects), `MovableCamera` (a free camera with a pose) and `TextOverlay`.
 
-Each camera owns a `mujoco.Renderer` of its image size (its own OpenGL context), so its
-scene, options and flags persist between renders, as in dm_control. `Physics.render` uses a
-camera for what its per-size renderers cannot do (text overlays, scene callbacks).
+Each camera owns its scene (`mujoco.MjvScene`) and options, so its flags persist between
+renders, as in dm_control; it draws with the Physics' `mujoco.Renderer` of its image size,
+whose OpenGL context all cameras and `Physics.render` of that size share (as dm_control's
+cameras share `physics.contexts`), so making a camera makes no context. `Physics.render`
+uses a camera for what its per-size renderers cannot do (text overlays, scene callbacks).
 """
 
 from __future__ import annotations
@@ -14,7 +16,6 @@ from typing import TYPE_CHECKING, NamedTuple
 import mujoco
 import numpy as np
 
-from mujoco_physics import _gl_backend
 from mujoco_physics.rendering import (
     camera_index,
     check_render_request,
@@ -136,8 +137,9 @@ class Camera:
         camera_id = camera_index(model, camera_id)
         self._physics = physics
         self._scene_callback = scene_callback
+        self._height, self._width = int(height), int(width)
         geoms = max_geom or 2 * (model.ngeom + model.nsite + model.njnt + model.nbody) + 1000
-        self._renderer = _gl_backend.new_renderer(model, height, width, max_geom=geoms)
+        self._scene = mujoco.MjvScene(model, maxgeom=geoms)
         self._option = mujoco.MjvOption()
         self._perturb = mujoco.MjvPerturb()
         self._camera = mujoco.MjvCamera()
@@ -149,11 +151,11 @@ class Camera:
 
     @property
     def width(self) -> int:
-        return self._renderer.width
+        return self._width
 
     @property
     def height(self) -> int:
-        return self._renderer.height
+        return self._height
 
     @property
     def option(self) -> mujoco.MjvOption:
@@ -163,7 +165,7 @@ class Camera:
     @property
     def scene(self) -> mujoco.MjvScene:
         """The scene; its `flags` (wireframe, shadows, ...) persist between renders."""
-        return self._renderer.scene
+        return self._scene
 
     def update(self, scene_option: mujoco.MjvOption | None = None) -> None:
         """Updates the scene from the physics' current state."""
@@ -219,23 +221,29 @@ class Camera:
         """
         check_render_request(depth, segmentation, bool(overlays), bool(render_flag_overrides))
         self.update(scene_option)
-        renderer = self._renderer
+        renderer = self._physics._offscreen_renderer(self._height, self._width)
+        if overlays:
+            with overridden_flags(self.scene.flags, render_flag_overrides):
+                return self._render_with_overlays(renderer, overlays)
+        # The shared renderer draws this camera's scene: its own is put back afterwards.
+        own_scene = renderer._scene
+        renderer._scene = self._scene
         with overridden_flags(self.scene.flags, render_flag_overrides):
             if depth:
                 renderer.enable_depth_rendering()
             elif segmentation:
                 renderer.enable_segmentation_rendering()
             try:
-                if overlays:
-                    return self._render_with_overlays(overlays)
                 return renderer.render()
             finally:
                 renderer.disable_depth_rendering()
                 renderer.disable_segmentation_rendering()
+                renderer._scene = own_scene
 
-    def _render_with_overlays(self, overlays: Sequence[TextOverlay]) -> np.ndarray:
+    def _render_with_overlays(
+        self, renderer: mujoco.Renderer, overlays: Sequence[TextOverlay]
+    ) -> np.ndarray:
         # mujoco.Renderer reads the pixels right after mjr_render: draw the text in between.
-        renderer = self._renderer
         renderer._gl_context.make_current()
         context = renderer._mjr_context
         rect = mujoco.MjrRect(0, 0, self.width, self.height)
@@ -276,8 +284,8 @@ class Camera:
         return Selected(_id(body), _id(geom[0]), _id(skin[0]), point if body >= 0 else None)
 
     def close(self) -> None:
-        """Releases the camera's renderer and OpenGL context."""
-        self._renderer.close()
+        """Does nothing: the renderer and its OpenGL context belong to the Physics (released
+        by `physics.free()`); kept for dm_control's API."""
 
 
 class MovableCamera(Camera):

@@ -473,6 +473,16 @@ class Physics:
         del self._sim, self._model, self._data, self._layout, self._ctrl
         self.__class__ = _freed_class(type(self))
 
+    def _offscreen_renderers(self) -> Renderers:
+        if self._renderers is None:
+            self._renderers = Renderers(self._sim.model)
+        return self._renderers
+
+    def _offscreen_renderer(self, height: int, width: int) -> mujoco.Renderer:
+        """The renderer (and OpenGL context) of images of this size that `render` and every
+        `Camera` of this Physics share."""
+        return self._offscreen_renderers().renderer(height, width)
+
     def _close_renderers(self) -> None:
         if self._renderers is not None:
             self._renderers.close()
@@ -522,9 +532,7 @@ class Physics:
                 )
             finally:
                 camera.close()
-        if self._renderers is None:
-            self._renderers = Renderers(self._sim.model)
-        return self._renderers.render(
+        return self._offscreen_renderers().render(
             self._sim.data,
             height,
             width,

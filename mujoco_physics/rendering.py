@@ -117,7 +117,7 @@ class Renderers:
         """
         check_render_request(depth, segmentation, False, bool(render_flag_overrides))
         camera = self.camera_id(camera_id)
-        renderer = self._renderer(height, width)
+        renderer = self.renderer(height, width)
         renderer.update_scene(data, camera=camera, scene_option=scene_option)
         if depth:
             renderer.enable_depth_rendering()
@@ -145,7 +145,12 @@ class Renderers:
             renderer.close()
         self._renderers.clear()
 
-    def _renderer(self, height: int, width: int) -> mujoco.Renderer:
+    def renderer(self, height: int, width: int) -> mujoco.Renderer:
+        """The renderer of images of (`height`, `width`), made on first use.
+
+        Raises:
+          ValueError: for an image larger than the model's offscreen buffer.
+        """
         key = (int(height), int(width))
         renderer = self._renderers.get(key)
         if renderer is None:

@@ -14,9 +14,15 @@ restore the model's parameters from a `ModelSnapshot`, so the model each reset s
 is known.
 """
 
+from __future__ import annotations
+
+from typing import TYPE_CHECKING
+
 import mujoco
 
-from mujoco_physics.engine import Physics
+if TYPE_CHECKING:
+    # For the annotation only: the engine names this module in its own annotations.
+    from mujoco_physics.engine import Physics
 
 __all__ = ["ResetState"]
 

@@ -1,9 +1,13 @@
 """Test-wide set-up: headless rendering through EGL unless the user chose a backend, a
-virtual X display for the tests that open windows, and recorders of compiles and resets."""
+virtual X display for the tests that open windows, recorders of compiles and resets, and a
+fresh interpreter for what a process without an optional library sees."""
 
 import os
 import shutil
 import subprocess
+import sys
+import textwrap
+from collections.abc import Callable
 
 import pytest
 
@@ -20,7 +24,7 @@ def pytest_collection_modifyitems(config, items):
         if "warp" in item.keywords:
             item.add_marker(pytest.mark.xdist_group("warp"))
     # The checked-in patch table is proven on one MuJoCo release; on another it does not
-    # apply (a proof cached by `python -m mjcf.patch_proof` may), so what it promises is
+    # apply (a proof cached by `python -m manipulation.patch_proof` may), so what it promises is
     # not there to check.
     import mujoco
 
@@ -92,3 +96,24 @@ def physics_resets(monkeypatch) -> list:
 
     monkeypatch.setattr(engine.Physics, "reset", recording)
     return calls
+
+
+@pytest.fixture
+def fresh_python() -> Callable[[str], subprocess.CompletedProcess]:
+    """Runs a snippet of Python (dedented) in a new interpreter whose environment holds only
+    `MUJOCO_GL=egl` and an empty PATH; returns the finished process, its output as text.
+
+    For what importing a package does, or what a missing optional library looks like
+    (`sys.modules[name] = None` in the snippet), where this process has already imported it.
+    """
+
+    def run(code: str) -> subprocess.CompletedProcess:
+        return subprocess.run(
+            [sys.executable, "-c", textwrap.dedent(code)],
+            capture_output=True,
+            text=True,
+            check=False,
+            env={"MUJOCO_GL": "egl", "PATH": ""},
+        )
+
+    return run

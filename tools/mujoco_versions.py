@@ -5,7 +5,7 @@ Usage: `python -m tools.mujoco_versions [--releases 3.3 4.0] [--strict] [-- PYTE
 Builds one venv per release under `.cache/mujoco_versions/<version>` (kept between runs;
 `--venvs` puts them elsewhere), installs this project with its `[test]` extra and that
 `mujoco` there, proves there which MJCF attributes a reset may patch in place
-(`python -m mjcf.patch_proof`: on the release of the checked-in table it checks the table,
+(`python -m manipulation.patch_proof`: on the release of the checked-in table it checks the table,
 on any other it caches its proof, in `xdg_cache/` beside the venvs), and runs `pytest` in
 each with `MUJOCO_GL=egl` and that proof; each run's full output goes to
 `logs/<version>.txt` beside the venvs. The releases are the newest patch of every
@@ -259,10 +259,10 @@ def run_release(release: Release, venvs: Path, pytest_args: list[str]) -> Outcom
 
 
 def _prove_patch_table(venv: Path, env: dict[str, str], log_path: Path) -> tuple[int | None, str]:
-    """Runs `python -m mjcf.patch_proof` in `venv`; returns the number of pairs it proved
+    """Runs `python -m manipulation.patch_proof` in `venv`; returns the number of pairs it proved
     (None when it printed none) and a problem, or '' when it exited 0."""
     with open(log_path, "a") as log:
-        args = [str(venv / "bin" / "python"), "-m", "mjcf.patch_proof"]
+        args = [str(venv / "bin" / "python"), "-m", "manipulation.patch_proof"]
         log.write(f"$ {' '.join(args)}\n")
         log.flush()
         result = subprocess.run(args, cwd=ROOT, env=env, capture_output=True, text=True)

@@ -3,7 +3,7 @@
 A CPU `composer.Environment` brings its model up to date at every reset: the
 `initialize_episode_mjcf` hooks (an `MJCFVariator`) change MJCF attributes, and the changes
 of attributes proven patchable (`mjcf.model_patch`, with the proof `mjcf.patch_table` finds
-for the installed MuJoCo, made by `python -m mjcf.patch_proof`) are written into the
+for the installed MuJoCo, made by `python -m manipulation.patch_proof`) are written into the
 compiled model, followed by `mj_setConst` where the table marks the attribute; the
 `initialize_episode` hooks (a `PhysicsVariator`) then write model fields through
 `physics.bind`. A batch compiles once and does the same for each world: the initial-state

@@ -4,6 +4,7 @@ import copy
 import gc
 import pickle
 import warnings
+from pathlib import Path
 
 import dm_env
 import numpy as np
@@ -372,6 +373,33 @@ def test_a_time_limit_just_past_one_step_names_one_step_and_its_single_multiple(
         "ends at the first step that reaches it, after 1 step at t=0.04 s; use a multiple "
         "of the control timestep (0.04 s) to end episodes at the time limit"
     )
+
+
+def test_under_the_dm_control_redirect_a_time_limit_between_steps_says_nothing(fresh_python):
+    # As dm_control, whose locomotion examples end 25 s episodes acting every 0.03 s
+    # (cmu_humanoid_heterogeneous_forage): they build without a warning, and an episode
+    # still ends at the first step that reaches the limit.
+    result = fresh_python(
+        f"""
+        import sys, warnings
+        sys.path.insert(0, {str(Path(__file__).parent)!r})
+        from composer import dm_control_compat
+        dm_control_compat.install()
+        warnings.simplefilter("error")
+        from dm_control import composer
+        from composer_scene import ReachTask
+        task = ReachTask()
+        task.set_timesteps(control_timestep=0.03, physics_timestep=0.005)
+        env = composer.Environment(task, time_limit=25)
+        env.reset()
+        steps = 1
+        while not env.step([0, 0]).last():
+            steps += 1
+        print(steps, round(env.physics.data.time, 6))
+        """
+    )
+    assert result.returncode == 0, result.stderr
+    assert result.stdout.split() == ["834", "25.02"]
 
 
 def test_the_time_limit_warning_is_given_once_per_environment():

@@ -1,9 +1,6 @@
 """The manipulation tasks are Gymnasium ids, registered without importing gymnasium early."""
 
 import math
-import subprocess
-import sys
-import textwrap
 import warnings
 
 import gymnasium
@@ -20,14 +17,8 @@ from manipulation.tasks import registry
 EPISODE_STEPS = 250
 
 
-def _run(code: str) -> str:
-    result = subprocess.run(
-        [sys.executable, "-c", textwrap.dedent(code)],
-        capture_output=True,
-        text=True,
-        check=False,
-        env={"MUJOCO_GL": "egl", "PATH": ""},
-    )
+def _output(result) -> str:
+    """The printed output of a `fresh_python` run that must have succeeded."""
     assert result.returncode == 0, result.stderr
     return result.stdout.strip()
 
@@ -107,17 +98,15 @@ def test_make_vec_rejects_num_threads_for_the_ray_backend():
         )
 
 
-def test_importing_the_packages_does_not_import_gymnasium():
-    assert (
-        _run(
-            """
-            import sys
-            import composer, mjcf, manipulation
-            print("gymnasium" in sys.modules)
-            """
-        )
-        == "False"
+def test_importing_the_packages_does_not_import_gymnasium(fresh_python):
+    result = fresh_python(
+        """
+        import sys
+        import composer, mjcf, manipulation
+        print("gymnasium" in sys.modules)
+        """
     )
+    assert _output(result) == "False"
 
 
 @pytest.mark.parametrize(
@@ -130,26 +119,26 @@ def test_importing_the_packages_does_not_import_gymnasium():
         "import manipulation; import composer.gym; import gymnasium",
     ],
 )
-def test_module_syntax_id_works_whatever_was_imported_first(imports):
-    out = _run(
+def test_module_syntax_id_works_whatever_was_imported_first(imports, fresh_python):
+    result = fresh_python(
         f"""
         {imports}
         env = gymnasium.make("manipulation:composer/lift_brick_features-v0")
         print(type(env.unwrapped).__name__)
         """
     )
-    assert out == "GymnasiumEnv"
+    assert _output(result) == "GymnasiumEnv"
 
 
-def test_plain_id_works_once_manipulation_is_imported_before_gymnasium():
-    out = _run(
+def test_plain_id_works_once_manipulation_is_imported_before_gymnasium(fresh_python):
+    result = fresh_python(
         """
         import manipulation
         import gymnasium
         print(gymnasium.spec("composer/reach_site_vision-v0").kwargs)
         """
     )
-    assert out == "{'environment_name': 'reach_site_vision'}"
+    assert _output(result) == "{'environment_name': 'reach_site_vision'}"
 
 
 def test_threaded_vector_env_matches_gymnasiums_sync_vector_env_step_for_step():

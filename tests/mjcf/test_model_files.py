@@ -189,3 +189,38 @@ def test_sub_models_that_name_each_other_are_an_error_not_endless(tmp_path):
         ValueError, match=r"in sub-model 'a.xml': .*'b.xml' is a sub-model of itself"
     ):
         mjcf.from_path(str(tmp_path / "a.xml"))
+
+
+def test_unnamed_sub_model_is_named_after_the_model_in_its_file_as_in_mujoco(scene_path):
+    scene_path.write_text(_SCENE.replace('name="robot" ', ""))
+    expected = mujoco.MjModel.from_xml_path(str(scene_path))  # attaches model="robot"
+    actual = _compile(mjcf.from_path(str(scene_path)))
+    assert actual.body("r_base").parentid == actual.body("mount").id
+    assert actual.nbody == expected.nbody == 3
+
+
+def test_unnamed_sub_model_of_a_file_without_a_model_name_takes_mujocos_default(scene_path):
+    robot = scene_path.parent / "robot" / "robot.xml"
+    robot.write_text(_ROBOT.replace(' model="robot"', ""))
+    default_name = mujoco.MjSpec().modelname
+    scene_path.write_text(
+        _SCENE.replace('name="robot" ', "").replace('model="robot"', f'model="{default_name}"')
+    )
+    expected = mujoco.MjModel.from_xml_path(str(scene_path))
+    actual = _compile(mjcf.from_path(str(scene_path)))
+    assert actual.body("r_base").parentid == actual.body("mount").id
+    assert actual.nbody == expected.nbody == 3
+
+
+@pytest.mark.parametrize("named", [True, False])
+def test_a_scene_that_attaches_a_sub_model_can_itself_be_attached_twice(scene_path, named):
+    if not named:
+        scene_path.write_text(_SCENE.replace('name="robot" ', ""))
+    world = mjcf.RootElement(model="world")
+    world.attach(mjcf.from_path(str(scene_path)))
+    world.attach(mjcf.from_path(str(scene_path)))
+    model = _compile(world)
+    # Each copy's attached robot is named inside its own scene's scope, on its own mount.
+    for scope in ("scene/", "scene_1/"):
+        assert model.body(f"{scope}r_base").parentid == model.body(f"{scope}mount").id
+    assert model.mesh_vertnum.tolist() == [5, 5]

@@ -179,7 +179,7 @@ def test_nothing_patches_on_a_mujoco_the_table_was_not_proven_on(scene, monkeypa
     # No proof of this release cached either (see tests/mjcf/test_patch_table.py).
     monkeypatch.setenv("XDG_CACHE_HOME", str(tmp_path))
     root.find("geom", "upper").rgba = [0.2, 0.4, 0.6, 0.8]
-    with pytest.warns(RuntimeWarning, match="python -m mjcf.patch_proof"):
+    with pytest.warns(RuntimeWarning, match="python -m manipulation.patch_proof"):
         assert not model_patch.patch_supported()
     assert not _patch(root, physics, count)
 

@@ -1,4 +1,5 @@
-"""mjcf.patch_proof proves value-only attributes and refuses those the compiler derives."""
+"""mjcf.patch_proof proves value-only attributes and refuses those the compiler derives;
+manipulation.patch_proof runs it on the task suite's models."""
 
 import copy
 import itertools
@@ -12,6 +13,7 @@ import mujoco
 import pytest
 
 import mjcf
+from manipulation import patch_proof as suite_proof
 from mjcf import patch_proof
 
 _BALL = "<mujoco><worldbody><body><freejoint/><geom size='0.1'/></body></worldbody></mujoco>"
@@ -20,7 +22,10 @@ _BALL = "<mujoco><worldbody><body><freejoint/><geom size='0.1'/></body></worldbo
 @pytest.mark.patch_table
 def test_colour_and_geom_size_are_proven_and_positions_are_refused_with_their_fields():
     proven, refused = patch_proof._verdicts(
-        patch_proof.prove({("geom", "rgba"), ("geom", "size"), ("geom", "pos"), ("body", "pos")})
+        patch_proof.prove(
+            {("geom", "rgba"), ("geom", "size"), ("geom", "pos"), ("body", "pos")},
+            itertools.chain(suite_proof.task_models(), patch_proof.scene_models()),
+        )
     )
     # A size moves the body's inertia and the model's statistics: mj_setConst must follow.
     assert proven == {("geom", "rgba"): False, ("geom", "size"): True}
@@ -70,8 +75,8 @@ def test_on_an_unproven_release_the_command_caches_a_proof_that_the_next_process
         "from mjcf import patch_proof\n"
         "patch_proof._candidates = lambda: {('geom', 'rgba'), ('geom', 'pos')}\n"
         "scene = patch_proof._scenes()['primitives_radians.xml']\n"
-        "patch_proof._corpus = lambda extra: iter([('scene', mjcf.from_xml_string(scene))])\n"
-        "raise SystemExit(patch_proof.main([]))\n"
+        "patch_proof._scenes = lambda: {'scene': scene}\n"
+        "raise SystemExit(patch_proof.main(corpus=(), argv=[]))\n"
     )
     use = fake_release + (
         "from mjcf import patch_table\n"
@@ -127,3 +132,22 @@ def test_every_scene_file_is_package_data_so_that_a_wheel_ships_it():
         package_data = tomllib.load(file)["tool"]["setuptools"]["package-data"]["mjcf"]
     shipped = {path.name for pattern in package_data for path in (root / "mjcf").glob(pattern)}
     assert shipped == _SCENE_FILES
+
+
+def test_the_proof_changes_the_models_it_is_given_besides_its_scenes(monkeypatch, capsys):
+    monkeypatch.setattr(patch_proof, "_candidates", lambda: {("geom", "rgba")})
+    monkeypatch.setattr(patch_proof, "_scenes", lambda: {})
+    ball = ("ball", mjcf.from_xml_string(_BALL))
+    with pytest.raises(SystemExit):  # the proof exits 1: one pair is no table
+        raise SystemExit(patch_proof.main(corpus=[ball], argv=[]))
+    printed = capsys.readouterr()
+    assert "ball: 1 changes of 1 pairs" in printed.err
+    assert "1 pairs patch, 0 recompile" in printed.out
+
+
+def test_the_library_module_run_as_a_command_names_the_suite_command():
+    result = subprocess.run(
+        [sys.executable, "-m", "mjcf.patch_proof"], capture_output=True, text=True, timeout=120
+    )
+    assert result.returncode == 1
+    assert "python -m manipulation.patch_proof" in result.stderr

@@ -74,7 +74,7 @@ def test_an_unproven_release_warns_once_naming_the_command_and_nothing_patches(
         assert not _patches_a_colour()
     assert len(caught) == 1
     message = str(caught[0].message)
-    assert "`python -m mjcf.patch_proof`" in message
+    assert "`python -m manipulation.patch_proof`" in message
     assert f"proven on mujoco 0.0.0, not on the installed {mujoco.__version__}" in message
     assert str(_cache_file(unproven_release)) in message
 
@@ -102,7 +102,7 @@ def test_a_corrupt_cache_file_is_ignored_with_a_warning_naming_it(unproven_relea
         assert not _patches_a_colour()
     assert len(caught) == 1
     assert str(path) in str(caught[0].message)
-    assert "python -m mjcf.patch_proof" in str(caught[0].message)
+    assert "python -m manipulation.patch_proof" in str(caught[0].message)
 
 
 def test_a_cache_file_with_malformed_pairs_is_ignored_with_a_warning(unproven_release):

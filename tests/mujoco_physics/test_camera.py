@@ -106,3 +106,42 @@ def test_scene_callback_adds_geoms_before_rendering(physics):
 
     image = physics.render(32, 32, camera_id="down", scene_callback=add_green_box)
     assert image[16, 16, 1] > 2 * image[16, 16, 0]
+
+
+def test_cameras_and_physics_render_of_one_size_share_one_opengl_context(physics, monkeypatch):
+    from mujoco_physics import _gl_backend
+
+    made = []
+    original = _gl_backend.new_renderer
+
+    def counting(model, height, width, **kwargs):
+        made.append((height, width))
+        return original(model, height=height, width=width, **kwargs)
+
+    monkeypatch.setattr(_gl_backend, "new_renderer", counting)
+    top = mujoco_physics.Camera(physics, height=64, width=64, camera_id="down")
+    free = mujoco_physics.MovableCamera(physics, height=64, width=64)
+    top.render()
+    free.render()
+    physics.render(64, 64, camera_id="down")
+    assert made == [(64, 64)]
+    mujoco_physics.Camera(physics, height=32, width=48).render()
+    assert made == [(64, 64), (32, 48)]
+
+
+def test_a_cameras_own_scene_flags_stay_its_own_on_the_shared_renderer(physics):
+    camera = mujoco_physics.Camera(physics, height=64, width=64, camera_id="down")
+    plain = physics.render(64, 64, camera_id="down")
+    np.testing.assert_array_equal(camera.render(), plain)
+    camera.scene.flags[mujoco.mjtRndFlag.mjRND_WIREFRAME] = 1
+    wireframe = camera.render()
+    assert not np.array_equal(wireframe, plain)
+    # physics.render of the same size draws its own scene, the camera keeps its flag.
+    np.testing.assert_array_equal(physics.render(64, 64, camera_id="down"), plain)
+    np.testing.assert_array_equal(camera.render(), wireframe)
+    # Depth from the camera is the Physics' depth of that view: the floor 2 m below the
+    # camera along its axis (a corner pixel), the ball's top 0.5 m above the floor.
+    depth = camera.render(depth=True)
+    np.testing.assert_allclose(depth, physics.render(64, 64, "down", depth=True))
+    assert depth[63, 0] == pytest.approx(2.0, abs=1e-3)
+    assert depth.min() == pytest.approx(1.5, abs=0.005)

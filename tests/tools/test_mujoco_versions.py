@@ -79,7 +79,7 @@ def test_the_patch_proof_runs_in_the_release_venv_and_its_count_is_read(tmp_path
     log = tmp_path / "log.txt"
     env = {"XDG_CACHE_HOME": str(tmp_path / "xdg"), "PATH": "/usr/bin:/bin"}
     assert mujoco_versions._prove_patch_table(venv, env, log) == (72, "")
-    assert f"ran -m mjcf.patch_proof with cache {tmp_path / 'xdg'}" in log.read_text()
+    assert f"ran -m manipulation.patch_proof with cache {tmp_path / 'xdg'}" in log.read_text()
 
 
 def test_a_failing_patch_proof_is_a_problem_of_the_release(tmp_path):

@@ -102,7 +102,7 @@ def test_every_mjcf_variation_is_refused_on_a_mujoco_release_the_table_is_not_pr
         NotImplementedError,
         match=rf"<site name='target'> attribute 'rgba'.*applies to mujoco "
         rf"{re.escape(mujoco.__version__)} \(the checked-in one is of mujoco 3\.0\.0; "
-        r"`python -m mjcf.patch_proof` proves",
+        r"`python -m manipulation.patch_proof` proves",
     ):
         batch.BatchEnvironment(_tinted_reach(), 2)
 

@@ -3,9 +3,6 @@ imports Ray, without Ray `RayVectorEnv` says which extra to install, and bad arg
 are refused, naming the argument, before Ray is started."""
 
 import functools
-import subprocess
-import sys
-import textwrap
 
 import pytest
 from gym_scene import CounterEnv
@@ -13,18 +10,8 @@ from gym_scene import CounterEnv
 from composer.gym import RayVectorEnv
 
 
-def _run(code: str) -> subprocess.CompletedProcess:
-    return subprocess.run(
-        [sys.executable, "-c", textwrap.dedent(code)],
-        capture_output=True,
-        text=True,
-        check=False,
-        env={"MUJOCO_GL": "egl", "PATH": ""},
-    )
-
-
-def test_importing_the_packages_and_composer_gym_does_not_import_ray():
-    result = _run(
+def test_importing_the_packages_and_composer_gym_does_not_import_ray(fresh_python):
+    result = fresh_python(
         """
         import sys
         import composer, mjcf, manipulation
@@ -37,8 +24,8 @@ def test_importing_the_packages_and_composer_gym_does_not_import_ray():
     assert result.stdout.strip() == "False"
 
 
-def test_without_ray_making_a_ray_vector_env_names_the_extra_to_install():
-    result = _run(
+def test_without_ray_making_a_ray_vector_env_names_the_extra_to_install(fresh_python):
+    result = fresh_python(
         """
         import sys
         sys.modules["ray"] = None  # as if Ray were not installed

@@ -2,23 +2,9 @@
 the Gymnasium integration never imports SB3 or torch, and without SB3 importing the
 adapter says which extra to install, and how to get torch's CPU build."""
 
-import subprocess
-import sys
-import textwrap
 
-
-def _run(code: str) -> subprocess.CompletedProcess:
-    return subprocess.run(
-        [sys.executable, "-c", textwrap.dedent(code)],
-        capture_output=True,
-        text=True,
-        check=False,
-        env={"MUJOCO_GL": "egl", "PATH": ""},
-    )
-
-
-def test_importing_composer_rl_and_composer_gym_imports_no_training_library():
-    result = _run(
+def test_importing_composer_rl_and_composer_gym_imports_no_training_library(fresh_python):
+    result = fresh_python(
         """
         import sys
         import composer, manipulation, composer.gym, composer.rl
@@ -29,8 +15,8 @@ def test_importing_composer_rl_and_composer_gym_imports_no_training_library():
     assert result.stdout.strip() == "False False"
 
 
-def test_without_sb3_importing_the_adapter_names_the_extra_and_the_cpu_torch():
-    result = _run(
+def test_without_sb3_importing_the_adapter_names_the_extra_and_the_cpu_torch(fresh_python):
+    result = fresh_python(
         """
         import sys
         sys.modules["stable_baselines3"] = None  # as if SB3 were not installed
