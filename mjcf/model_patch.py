@@ -19,6 +19,14 @@ the value that compiles is set on the element itself or on one of its default cl
 element of that model whose classes include the template's class. A geom's `size` feeds
 more fields than its own (bounds, its body's BVH and inertia): `mjcf.geom_size_patch`
 computes those. Anything else returns False and the caller recompiles.
+
+After `mj_setConst`, the patch also brings up to date what the compiler computes at
+`qpos0` and `mj_setConst` does not: the model statistics (`mjcf.model_statistics`:
+`stat.center` and `stat.extent`, the viewer's framing, and `stat.meaninertia`, which scales
+the solver's tolerance), and the rest length of tendons whose `springlength` the compiler
+derives (a spatial tendon through a moved site). So a patched model stays bit-identical to
+a recompile, statistics included, where dm_control would recompile. A quaternion is
+normalised as the compiler normalises it.
 """
 
 from __future__ import annotations
@@ -46,6 +54,10 @@ _Write = geom_size_patch.FieldWrite
 # Pairs whose compiled values feed fields besides their own: they patch through a module
 # that computes those fields too.
 _GEOM_SIZE = ("geom", "size")
+# The orientation attribute the compiler normalises to a unit quaternion.
+_QUATERNION = "quat"
+# MuJoCo's mjMINVAL: below this norm the compiler does not normalise a quaternion.
+_SMALLEST_NORM = 1e-15
 
 
 def patch_supported() -> bool:
@@ -113,8 +125,9 @@ def patch_model(
         model = physics.model.ptr
         if set_const:
             mujoco.mj_setConst(model, physics.data.ptr)
-        if sized_geoms:
-            # Sizes move the statistics, which mj_setConst leaves alone.
+            _write_derived_spring_lengths(physics)
+        if set_const or sized_geoms:
+            # What moves a constant moves the statistics, which mj_setConst leaves alone.
             model_statistics.write_statistics(
                 model,
                 model_statistics.compiled_statistics(model, physics.data.ptr),
@@ -122,6 +135,25 @@ def patch_model(
             )
         physics.mark_as_dirty()
     return True
+
+
+def _write_derived_spring_lengths(physics) -> None:
+    """Sets the rest length of every tendon whose `springlength` the compiler derives to its
+    length at `qpos0`, as `mj_setConst` has just recomputed it (`tendon_length0`).
+
+    The compiler derives it where the resolved `springlength` is unset or all -1 (one -1
+    stands for both ends of the range), and `mj_setConst` does not: a moved site that a
+    spatial tendon passes through changes that tendon's spring, physics a recompile gives.
+    """
+    model = physics.model.ptr
+    if not model.ntendon:
+        return
+    for tendon in physics.mjcf_model.find_all("tendon"):
+        source = traversal_utils.default_value_source(tendon, "springlength")
+        if source is not None and np.any(np.asarray(source._attributes["springlength"]) != -1):
+            continue
+        index = binding.object_id(physics.field_layout, physics.mjcf_model, tendon)
+        model.tendon_lengthspring[index] = model.tendon_length0[index]
 
 
 def _elements_using(template, xml_name: str) -> list:
@@ -161,4 +193,18 @@ def _write_for(physics, element, xml_name: str) -> _Write | None:
     # As many numbers as the field holds for the object: MuJoCo fills in missing ones.
     if value.size != np.size(target):
         return None
+    if xml_name == _QUATERNION:
+        value = _unit_quaternion(value)
+        if value is None:
+            return None
     return _Write(array, index, value.reshape(np.shape(target)))
+
+
+def _unit_quaternion(value: np.ndarray) -> np.ndarray | None:
+    """`value` divided by its norm, the norm summed in the compiler's order; None for a
+    quaternion too short to normalise (the compiler refuses it)."""
+    w, x, y, z = (float(number) for number in value)
+    norm = np.sqrt(w * w + x * x + y * y + z * z)
+    if norm < _SMALLEST_NORM:
+        return None
+    return value / norm

@@ -311,3 +311,66 @@ def test_a_springdamper_set_after_a_size_patch_stops_the_next_one():
     count = root.modification_count
     peg.size = [0.0045, 0.002]
     assert not _patch(root, physics, count)
+
+
+def _assert_everything_equals_a_recompile(root, physics):
+    patched = _everything(physics.model.ptr)
+    compiled = _everything(mjcf.Physics.from_mjcf_model(root).model.ptr)
+    assert [name for name in compiled if patched[name] != compiled[name]] == []
+
+
+# A goal site on the world, and a site a spatial tendon with a derived rest length runs to.
+_SITES = """
+<mujoco model="sites">
+  <worldbody>
+    <site name="goal" pos="0.1 0.2 0"/>
+    <site name="anchor" pos="0 0 1"/>
+    <body name="slider" pos="0 0 0.2">
+      <joint name="x" type="slide" axis="1 0 0"/>
+      <geom size="0.05" mass="1"/>
+      <site name="hook" pos="0 0 0.05"/>
+    </body>
+  </worldbody>
+  <tendon>
+    <spatial name="cord" stiffness="10">
+      <site site="anchor"/>
+      <site site="hook"/>
+    </spatial>
+  </tendon>
+</mujoco>
+"""
+
+
+@pytest.mark.patch_table
+def test_a_moved_goal_site_patches_to_a_recompile_framing_statistics_included():
+    root = mjcf.from_xml_string(_SITES)
+    physics = mjcf.Physics.from_mjcf_model(root)
+    count = root.modification_count
+    root.find("site", "goal").pos = [1.5, -0.7, 0.3]
+    assert _patch(root, physics, count)
+    # The viewer's framing follows the goal, as a recompile's does.
+    assert physics.model.ptr.stat.center[0] > 0.5
+    _assert_everything_equals_a_recompile(root, physics)
+
+
+@pytest.mark.patch_table
+def test_a_moved_tendon_site_moves_the_tendons_derived_rest_length():
+    root = mjcf.from_xml_string(_SITES)
+    physics = mjcf.Physics.from_mjcf_model(root)
+    count = root.modification_count
+    root.find("site", "hook").pos = [0.3, 0, 0.05]
+    assert _patch(root, physics, count)
+    # anchor (0, 0, 1) to hook (0.3, 0, 0.25): the spring rests at that length.
+    np.testing.assert_allclose(physics.model.ptr.tendon_lengthspring[0], [0.8077747] * 2)
+    _assert_everything_equals_a_recompile(root, physics)
+
+
+@pytest.mark.patch_table
+def test_a_site_quaternion_is_normalised_as_the_compiler_does():
+    root = mjcf.from_xml_string(_SITES)
+    physics = mjcf.Physics.from_mjcf_model(root)
+    count = root.modification_count
+    root.find("site", "goal").quat = [2, 0, 0, 2]
+    assert _patch(root, physics, count)
+    np.testing.assert_allclose(physics.model.ptr.site_quat[0], [0.5**0.5, 0, 0, 0.5**0.5])
+    _assert_everything_equals_a_recompile(root, physics)
