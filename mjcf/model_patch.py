@@ -25,8 +25,10 @@ After `mj_setConst`, the patch also brings up to date what the compiler computes
 `stat.center` and `stat.extent`, the viewer's framing, and `stat.meaninertia`, which scales
 the solver's tolerance), and the rest length of tendons whose `springlength` the compiler
 derives (a spatial tendon through a moved site). So a patched model stays bit-identical to
-a recompile, statistics included, where dm_control would recompile. A quaternion is
-normalised as the compiler normalises it.
+a recompile, statistics included, where dm_control would recompile. A quaternion or a
+light's direction is normalised as the compiler normalises it. Declined (recompiled): the
+pose of a body with a free joint (its `qpos0` is that pose, which only a compile sets) and
+a quaternion beside another orientation (the compiler refuses the model).
 """
 
 from __future__ import annotations
@@ -54,10 +56,17 @@ _Write = geom_size_patch.FieldWrite
 # Pairs whose compiled values feed fields besides their own: they patch through a module
 # that computes those fields too.
 _GEOM_SIZE = ("geom", "size")
-# The orientation attribute the compiler normalises to a unit quaternion.
-_QUATERNION = "quat"
-# MuJoCo's mjMINVAL: below this norm the compiler does not normalise a quaternion.
+# Attributes the compiler normalises to unit length: a quaternion, a light's direction.
+_UNIT_VECTORS = ("quat", "dir")
+# Below this norm the compiler refuses (or replaces) a vector instead of normalising it.
 _SMALLEST_NORM = 1e-15
+# The other ways of giving an orientation, which the compiler turns into a quaternion (and
+# refuses alongside one): the fields of MuJoCo's orientation spec but its type.
+_ORIENTATIONS = tuple(
+    name for name in dir(mujoco.MjsOrientation) if not name.startswith("_") and name != "type"
+)
+# A body's pose attributes: a free joint's qpos0 is its body's pose, which only a compile sets.
+_POSE = ("pos", "quat")
 
 
 def patch_supported() -> bool:
@@ -193,18 +202,41 @@ def _write_for(physics, element, xml_name: str) -> _Write | None:
     # As many numbers as the field holds for the object: MuJoCo fills in missing ones.
     if value.size != np.size(target):
         return None
-    if xml_name == _QUATERNION:
-        value = _unit_quaternion(value)
+    if xml_name == "quat" and any(
+        traversal_utils.default_value_source(element, name) is not None
+        for name in _ORIENTATIONS
+        if name in element._spec.attributes
+    ):
+        return None  # the compiler refuses a second orientation
+    if xml_name in _POSE and _has_free_joint(element):
+        return None
+    if xml_name in _UNIT_VECTORS:
+        value = _unit_vector(value)
         if value is None:
             return None
     return _Write(array, index, value.reshape(np.shape(target)))
 
 
-def _unit_quaternion(value: np.ndarray) -> np.ndarray | None:
-    """`value` divided by its norm, the norm summed in the compiler's order; None for a
-    quaternion too short to normalise (the compiler refuses it)."""
-    w, x, y, z = (float(number) for number in value)
-    norm = np.sqrt(w * w + x * x + y * y + z * z)
+def _unit_vector(value: np.ndarray) -> np.ndarray | None:
+    """`value` divided by its norm, the squares summed in the compiler's order; None for a
+    vector too short to normalise."""
+    total = 0.0
+    for number in value:
+        total += float(number) * float(number)
+    norm = np.sqrt(total)
     if norm < _SMALLEST_NORM:
         return None
     return value / norm
+
+
+def _has_free_joint(element) -> bool:
+    """Whether `element` is a body with a free joint of its own."""
+    if element._spec.name != "body":
+        return False
+    if element.get_children("freejoint"):
+        return True
+    for joint in element.get_children("joint"):
+        source = traversal_utils.default_value_source(joint, "type")
+        if source is not None and source._attributes["type"] == "free":
+            return True
+    return False

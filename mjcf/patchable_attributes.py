@@ -9,10 +9,13 @@ MUJOCO_VERSION = "4.0.0"
 # (tag, attribute) -> whether mj_setConst must run after the write.
 PROVEN: dict[tuple[str, str], bool] = {
     ("body", "gravcomp"): True,
+    ("body", "pos"): True,
+    ("body", "quat"): True,
     ("body", "user"): False,
     ("camera", "fovy"): False,
     ("camera", "ipd"): False,
     ("camera", "pos"): True,
+    ("camera", "quat"): True,
     ("camera", "user"): False,
     ("fixed", "damping"): False,
     ("fixed", "frictionloss"): False,
@@ -52,6 +55,7 @@ PROVEN: dict[tuple[str, str], bool] = {
     ("light", "bulbradius"): False,
     ("light", "cutoff"): False,
     ("light", "diffuse"): False,
+    ("light", "dir"): True,
     ("light", "exponent"): False,
     ("light", "intensity"): False,
     ("light", "pos"): True,
@@ -119,11 +123,6 @@ REFUSED: dict[tuple[str, str], str] = {
     ("ballquat", "cutoff"): "no model of the corpus has it",
     ("ballquat", "noise"): "no model of the corpus has it",
     ("ballquat", "user"): "no model of the corpus has it",
-    ("body", "pos"): "actuator_acc0, body_invweight0, cam_poscom0, data.M, data.cdof, "
-    "data.cinert ...",
-    ("body", "quat"): "(the changed model does not compile), body_invweight0, data.M, "
-    "data.cdof, data.cdof_dot, data.cinert ...",
-    ("camera", "quat"): "(the changed model does not compile)",
     ("camera", "sensorsize"): "(the changed model does not compile)",
     ("camprojection", "cutoff"): "no model of the corpus has it",
     ("camprojection", "noise"): "no model of the corpus has it",
@@ -263,7 +262,6 @@ REFUSED: dict[tuple[str, str], str] = {
     ("key", "qpos"): "no model of the corpus has it",
     ("key", "qvel"): "no model of the corpus has it",
     ("key", "time"): "no model of the corpus has it",
-    ("light", "dir"): "light_dir",
     ("light", "specular"): "light_specular",
     ("magnetometer", "cutoff"): "no model of the corpus has it",
     ("magnetometer", "noise"): "no model of the corpus has it",

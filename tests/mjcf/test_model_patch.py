@@ -374,3 +374,53 @@ def test_a_site_quaternion_is_normalised_as_the_compiler_does():
     assert _patch(root, physics, count)
     np.testing.assert_allclose(physics.model.ptr.site_quat[0], [0.5**0.5, 0, 0, 0.5**0.5])
     _assert_everything_equals_a_recompile(root, physics)
+
+
+_BODIES = """
+<mujoco model="bodies">
+  <worldbody>
+    <light name="lamp" pos="0 0 3" dir="0 0 -1"/>
+    <body name="wall" pos="0.5 0 0.1">
+      <geom type="box" size="0.02 0.3 0.1"/>
+      <camera name="eye" pos="0 0 0.2" xyaxes="0 1 0 0 0 1"/>
+    </body>
+    <body name="ball" pos="0 0 0.1">
+      <freejoint/>
+      <geom size="0.05"/>
+    </body>
+  </worldbody>
+</mujoco>
+"""
+
+
+@pytest.mark.patch_table
+def test_a_welded_bodys_pose_and_a_lights_direction_patch_to_a_recompile():
+    root = mjcf.from_xml_string(_BODIES)
+    physics = mjcf.Physics.from_mjcf_model(root)
+    count = root.modification_count
+    wall = root.find("body", "wall")
+    wall.pos = [0.7, -0.2, 0.1]
+    wall.quat = [1, 0, 0, 1]
+    root.find("light", "lamp").dir = [0, 1, -1]
+    assert _patch(root, physics, count)
+    np.testing.assert_allclose(physics.model.ptr.light_dir[0], [0, 0.5**0.5, -(0.5**0.5)])
+    _assert_everything_equals_a_recompile(root, physics)
+
+
+@pytest.mark.parametrize(
+    "change",
+    [
+        # A free body's qpos0 is its pose, which only the compiler sets.
+        lambda root: setattr(root.find("body", "ball"), "pos", [0.2, 0, 0.1]),
+        # A quaternion beside xyaxes: the compiler refuses the model.
+        lambda root: setattr(root.find("camera", "eye"), "quat", [1, 0, 0, 0]),
+    ],
+    ids=["free_body_pos", "second_orientation"],
+)
+@pytest.mark.patch_table
+def test_a_pose_only_a_compile_resolves_is_not_patched(change):
+    root = mjcf.from_xml_string(_BODIES)
+    physics = mjcf.Physics.from_mjcf_model(root)
+    count = root.modification_count
+    change(root)
+    assert not _patch(root, physics, count)
