@@ -7,7 +7,8 @@ import pytest
 from push_puck import HALF_SIDE, BatchPushPuck, PushPuck
 
 import composer
-from composer import batch
+from composer import batch, variation
+from composer.variation import distributions, rotations
 
 pytestmark = [pytest.mark.warp, pytest.mark.patch_table]
 pytest.importorskip("warp", reason="needs MuJoCo Warp: pip install -e '.[warp]'")
@@ -65,3 +66,41 @@ def test_worlds_step_and_reward_as_their_cpu_environments(batch_env):
                 atol=1e-4,
             )
             assert abs(float(step.reward[world]) - expected.reward) < 1e-3
+
+
+class _WalledPushPuck(PushPuck):
+    """push_puck with a wall, a body welded to the world, placed and turned every episode by
+    an `MJCFVariator` on the body's `pos` and `quat`."""
+
+    def __init__(self):
+        super().__init__()
+        self.wall = self.root_entity.mjcf_model.worldbody.add("body", name="wall", pos=[0.5, 0, 0])
+        self.wall.add("geom", name="wall", type="box", size=[0.02, 0.3, 0.05], pos=[0, 0, 0.05])
+        self._wall_variator = variation.MJCFVariator()
+        self._wall_variator.bind_attributes(
+            self.wall,
+            pos=distributions.Uniform([0.4, -0.1, 0], [0.6, 0.1, 0]),
+            quat=rotations.UniformQuaternion(),
+        )
+
+    def initialize_episode_mjcf(self, random_state) -> None:
+        super().initialize_episode_mjcf(random_state)
+        self._wall_variator.apply_variations(random_state)
+
+
+def test_a_welded_body_moved_by_an_mjcf_variator_is_placed_per_world_as_on_the_cpu():
+    env = batch.BatchEnvironment(_WalledPushPuck(), len(SEEDS), random_states=SEEDS, device="cpu")
+    cpu_envs = [composer.Environment(_WalledPushPuck(), random_state=seed) for seed in SEEDS]
+    assert {"body_pos", "body_quat"} <= set(env.physics.batched_model_fields)
+    for _ in range(RESETS):
+        env.reset()
+        wall = env.physics.bind(env.task.task.wall.find("geom", "wall"))
+        xpos, xmat = np.array(wall.xpos), np.array(wall.xmat)
+        for world, cpu in enumerate(cpu_envs):
+            cpu.reset()
+            expected = cpu.physics.bind(cpu.task.wall.find("geom", "wall"))
+            # float32 on the device: the CPU's pose to rounding.
+            np.testing.assert_allclose(xpos[world], expected.xpos, atol=1e-6, err_msg=world)
+            np.testing.assert_allclose(xmat[world], expected.xmat, atol=1e-6, err_msg=world)
+        assert len(np.unique(xpos[:, 0])) == len(SEEDS)
+    env.close()
