@@ -27,8 +27,10 @@ the solver's tolerance), and the rest length of tendons whose `springlength` the
 derives (a spatial tendon through a moved site). So a patched model stays bit-identical to
 a recompile, statistics included, where dm_control would recompile. A quaternion or a
 light's direction is normalised as the compiler normalises it. Declined (recompiled): the
-pose of a body with a free joint (its `qpos0` is that pose, which only a compile sets) and
-a quaternion beside another orientation (the compiler refuses the model).
+pose of a body with a free joint (its `qpos0` is that pose, which only a compile sets), of
+a moving body in a model with `springdamper` joints (converted with its tree's inertia),
+of a geom or site given by `fromto`, and a quaternion beside another orientation (the
+compiler refuses the model).
 """
 
 from __future__ import annotations
@@ -65,8 +67,10 @@ _SMALLEST_NORM = 1e-15
 _ORIENTATIONS = tuple(
     name for name in dir(mujoco.MjsOrientation) if not name.startswith("_") and name != "type"
 )
-# A body's pose attributes: a free joint's qpos0 is its body's pose, which only a compile sets.
+# Pose attributes: a free joint's qpos0 is its body's pose, which only a compile sets, and a
+# segment (`fromto`) gives a geom's or site's pose in their place.
 _POSE = ("pos", "quat")
+_SEGMENT = "fromto"
 
 
 def patch_supported() -> bool:
@@ -202,13 +206,9 @@ def _write_for(physics, element, xml_name: str) -> _Write | None:
     # As many numbers as the field holds for the object: MuJoCo fills in missing ones.
     if value.size != np.size(target):
         return None
-    if xml_name == "quat" and any(
-        traversal_utils.default_value_source(element, name) is not None
-        for name in _ORIENTATIONS
-        if name in element._spec.attributes
-    ):
+    if xml_name == "quat" and any(_resolves(element, name) for name in _ORIENTATIONS):
         return None  # the compiler refuses a second orientation
-    if xml_name in _POSE and _has_free_joint(element):
+    if xml_name in _POSE and _pose_needs_a_compile(physics, element, object_id):
         return None
     if xml_name in _UNIT_VECTORS:
         value = _unit_vector(value)
@@ -229,10 +229,36 @@ def _unit_vector(value: np.ndarray) -> np.ndarray | None:
     return value / norm
 
 
-def _has_free_joint(element) -> bool:
-    """Whether `element` is a body with a free joint of its own."""
+def _resolves(element, xml_name: str) -> bool:
+    """Whether `element` has attribute `xml_name`, set on it or by a default class."""
+    return (
+        xml_name in element._spec.attributes
+        and traversal_utils.default_value_source(element, xml_name) is not None
+    )
+
+
+def _pose_needs_a_compile(physics, element, object_id: int) -> bool:
+    """Whether a change of `element`'s position or orientation is more than a write and
+    `mj_setConst`: a segment (`fromto`) gives it, it is a body with a free joint, or a body
+    that moves (not welded to the world) in a model with a joint whose stiffness and
+    damping come from `springdamper`, which the compiler converts with the inertia of the
+    joint's tree."""
+    if _resolves(element, _SEGMENT):
+        return True
     if element._spec.name != "body":
         return False
+    if _has_free_joint(element):
+        return True
+    if physics.model.ptr.body_weldid[object_id] == 0:
+        return False
+    return any(
+        traversal_utils.default_value_source(joint, "springdamper") is not None
+        for joint in physics.mjcf_model.find_all("joint")
+    )
+
+
+def _has_free_joint(element) -> bool:
+    """Whether the body `element` has a free joint of its own."""
     if element.get_children("freejoint"):
         return True
     for joint in element.get_children("joint"):

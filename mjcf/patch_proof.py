@@ -149,8 +149,18 @@ def _variety(element, pair) -> tuple:
 
     For a geom's size (which feeds its bounds, its body's BVH and its body's inertia): the
     geom's type, whether it is given by `fromto`, and whether its body has an explicit
-    inertial; every template. For any other pair, nothing: one element of a kind suffices.
+    inertial; every template. For a position or quaternion: whether `fromto` gives it and
+    whether the element is a body with a free joint. For any other pair, nothing: one
+    element of a kind suffices.
     """
+    if pair[1] in ("pos", "quat"):
+        # Poses the patch declines (a free body's, a segment's) and those it writes.
+        return (
+            traversal_utils.default_value_source(element, "fromto") is not None
+            if "fromto" in element._spec.attributes
+            else False,
+            bool(element.get_children("freejoint")) if element._spec.name == "body" else False,
+        )
     if pair != ("geom", "size"):
         return ()
     if traversal_utils.is_default_template(element):

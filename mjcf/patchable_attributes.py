@@ -212,8 +212,7 @@ REFUSED: dict[tuple[str, str], str] = {
     "data.qacc_smooth, data.qfrc_actuator, data.qfrc_smooth",
     ("general", "forcerange"): "actuator_forcelimited, data.actuator_force, data.qacc, "
     "data.qacc_smooth, data.qfrc_actuator, data.qfrc_smooth",
-    ("geom", "pos"): "(the changed model does not compile), body_inertia, body_ipos, "
-    "body_iquat, bvh_aabb, bvh_nodeid ...",
+    ("geom", "pos"): "body_inertia, body_ipos, body_iquat, bvh_aabb, bvh_nodeid, cam_poscom0 ...",
     ("geom", "quat"): "actuator_acc0, body_inertia, body_invweight0, body_iquat, bvh_aabb, "
     "data.M ...",
     ("gyro", "cutoff"): "no model of the corpus has it",

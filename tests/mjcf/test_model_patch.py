@@ -424,3 +424,22 @@ def test_a_pose_only_a_compile_resolves_is_not_patched(change):
     count = root.modification_count
     change(root)
     assert not _patch(root, physics, count)
+
+
+@pytest.mark.patch_table
+def test_a_moving_body_in_a_model_with_springdamper_recompiles_and_a_welded_one_patches():
+    # springdamper's stiffness and damping come from the inertia of the joint's tree.
+    root = mjcf.from_xml_string(_BODIES)
+    arm = root.worldbody.add("body", name="arm", pos=[0, 0.5, 0.5])
+    arm.add("joint", name="hinge", axis=[0, 1, 0], springdamper=[0.5, 1])
+    link = arm.add("body", name="link", pos=[0.2, 0, 0])
+    link.add("geom", size=[0.05])
+    physics = mjcf.Physics.from_mjcf_model(root)
+    count = root.modification_count
+    link.pos = [0.3, 0, 0]
+    assert not _patch(root, physics, count)
+    physics = mjcf.Physics.from_mjcf_model(root)
+    count = root.modification_count
+    root.find("body", "wall").pos = [0.6, 0, 0.1]
+    assert _patch(root, physics, count)
+    _assert_everything_equals_a_recompile(root, physics)
