@@ -19,6 +19,18 @@ the value that compiles is set on the element itself or on one of its default cl
 element of that model whose classes include the template's class. A geom's `size` feeds
 more fields than its own (bounds, its body's BVH and inertia): `mjcf.geom_size_patch`
 computes those. Anything else returns False and the caller recompiles.
+
+After `mj_setConst`, the patch also brings up to date what the compiler computes at
+`qpos0` and `mj_setConst` does not: the model statistics (`mjcf.model_statistics`:
+`stat.center` and `stat.extent`, the viewer's framing, and `stat.meaninertia`, which scales
+the solver's tolerance), and the rest length of tendons whose `springlength` the compiler
+derives (a spatial tendon through a moved site). So a patched model stays bit-identical to
+a recompile, statistics included, where dm_control would recompile. A quaternion or a
+light's direction is normalised as the compiler normalises it. Declined (recompiled): the
+pose of a body with a free joint (its `qpos0` is that pose, which only a compile sets), of
+a moving body in a model with `springdamper` joints (converted with its tree's inertia),
+of a geom or site given by `fromto`, and a quaternion beside another orientation (the
+compiler refuses the model).
 """
 
 from __future__ import annotations
@@ -46,6 +58,19 @@ _Write = geom_size_patch.FieldWrite
 # Pairs whose compiled values feed fields besides their own: they patch through a module
 # that computes those fields too.
 _GEOM_SIZE = ("geom", "size")
+# Attributes the compiler normalises to unit length: a quaternion, a light's direction.
+_UNIT_VECTORS = ("quat", "dir")
+# Below this norm the compiler refuses (or replaces) a vector instead of normalising it.
+_SMALLEST_NORM = 1e-15
+# The other ways of giving an orientation, which the compiler turns into a quaternion (and
+# refuses alongside one): the fields of MuJoCo's orientation spec but its type.
+_ORIENTATIONS = tuple(
+    name for name in dir(mujoco.MjsOrientation) if not name.startswith("_") and name != "type"
+)
+# Pose attributes: a free joint's qpos0 is its body's pose, which only a compile sets, and a
+# segment (`fromto`) gives a geom's or site's pose in their place.
+_POSE = ("pos", "quat")
+_SEGMENT = "fromto"
 
 
 def patch_supported() -> bool:
@@ -113,8 +138,9 @@ def patch_model(
         model = physics.model.ptr
         if set_const:
             mujoco.mj_setConst(model, physics.data.ptr)
-        if sized_geoms:
-            # Sizes move the statistics, which mj_setConst leaves alone.
+            _write_derived_spring_lengths(physics)
+        if set_const or sized_geoms:
+            # What moves a constant moves the statistics, which mj_setConst leaves alone.
             model_statistics.write_statistics(
                 model,
                 model_statistics.compiled_statistics(model, physics.data.ptr),
@@ -122,6 +148,25 @@ def patch_model(
             )
         physics.mark_as_dirty()
     return True
+
+
+def _write_derived_spring_lengths(physics) -> None:
+    """Sets the rest length of every tendon whose `springlength` the compiler derives to its
+    length at `qpos0`, as `mj_setConst` has just recomputed it (`tendon_length0`).
+
+    The compiler derives it where the resolved `springlength` is unset or all -1 (one -1
+    stands for both ends of the range), and `mj_setConst` does not: a moved site that a
+    spatial tendon passes through changes that tendon's spring, physics a recompile gives.
+    """
+    model = physics.model.ptr
+    if not model.ntendon:
+        return
+    for tendon in physics.mjcf_model.find_all("tendon"):
+        source = traversal_utils.default_value_source(tendon, "springlength")
+        if source is not None and np.any(np.asarray(source._attributes["springlength"]) != -1):
+            continue
+        index = binding.object_id(physics.field_layout, physics.mjcf_model, tendon)
+        model.tendon_lengthspring[index] = model.tendon_length0[index]
 
 
 def _elements_using(template, xml_name: str) -> list:
@@ -161,4 +206,63 @@ def _write_for(physics, element, xml_name: str) -> _Write | None:
     # As many numbers as the field holds for the object: MuJoCo fills in missing ones.
     if value.size != np.size(target):
         return None
+    if xml_name == "quat" and any(_resolves(element, name) for name in _ORIENTATIONS):
+        return None  # the compiler refuses a second orientation
+    if xml_name in _POSE and _pose_needs_a_compile(physics, element, object_id):
+        return None
+    if xml_name in _UNIT_VECTORS:
+        value = _unit_vector(value)
+        if value is None:
+            return None
     return _Write(array, index, value.reshape(np.shape(target)))
+
+
+def _unit_vector(value: np.ndarray) -> np.ndarray | None:
+    """`value` divided by its norm, the squares summed in the compiler's order; None for a
+    vector too short to normalise."""
+    total = 0.0
+    for number in value:
+        total += float(number) * float(number)
+    norm = np.sqrt(total)
+    if norm < _SMALLEST_NORM:
+        return None
+    return value / norm
+
+
+def _resolves(element, xml_name: str) -> bool:
+    """Whether `element` has attribute `xml_name`, set on it or by a default class."""
+    return (
+        xml_name in element._spec.attributes
+        and traversal_utils.default_value_source(element, xml_name) is not None
+    )
+
+
+def _pose_needs_a_compile(physics, element, object_id: int) -> bool:
+    """Whether a change of `element`'s position or orientation is more than a write and
+    `mj_setConst`: a segment (`fromto`) gives it, it is a body with a free joint, or a body
+    that moves (not welded to the world) in a model with a joint whose stiffness and
+    damping come from `springdamper`, which the compiler converts with the inertia of the
+    joint's tree."""
+    if _resolves(element, _SEGMENT):
+        return True
+    if element._spec.name != "body":
+        return False
+    if _has_free_joint(element):
+        return True
+    if physics.model.ptr.body_weldid[object_id] == 0:
+        return False
+    return any(
+        traversal_utils.default_value_source(joint, "springdamper") is not None
+        for joint in physics.mjcf_model.find_all("joint")
+    )
+
+
+def _has_free_joint(element) -> bool:
+    """Whether the body `element` has a free joint of its own."""
+    if element.get_children("freejoint"):
+        return True
+    for joint in element.get_children("joint"):
+        source = traversal_utils.default_value_source(joint, "type")
+        if source is not None and source._attributes["type"] == "free":
+            return True
+    return False

@@ -145,8 +145,18 @@ def _variety(element, pair) -> tuple:
 
     For a geom's size (which feeds its bounds, its body's BVH and its body's inertia): the
     geom's type, whether it is given by `fromto`, and whether its body has an explicit
-    inertial; every template. For any other pair, nothing: one element of a kind suffices.
+    inertial; every template. For a position or quaternion: whether `fromto` gives it and
+    whether the element is a body with a free joint. For any other pair, nothing: one
+    element of a kind suffices.
     """
+    if pair[1] in ("pos", "quat"):
+        # Poses the patch declines (a free body's, a segment's) and those it writes.
+        return (
+            traversal_utils.default_value_source(element, "fromto") is not None
+            if "fromto" in element._spec.attributes
+            else False,
+            bool(element.get_children("freejoint")) if element._spec.name == "body" else False,
+        )
     if pair != ("geom", "size"):
         return ()
     if traversal_utils.is_default_template(element):
@@ -300,8 +310,14 @@ def _prove_change(root, base, element, pair, record: _Record) -> None:
         compiled = None
     record.changes += 1
     if compiled is None:
-        record.failures += 1
-        record.differing.add("(the changed model does not compile)")
+        # Declining it is right (the recompile then raises the compiler's error); writing
+        # it would hide a model the compiler refuses, such as a second orientation.
+        physics = mjcf.Physics.from_compiled_mjcf_model(root, copy.copy(base))
+        if model_patch.patch_model(physics, changes, proven={pair: True}):
+            record.failures += 1
+            record.differing.add("(the changed model does not compile)")
+        else:
+            record.declined += 1
     else:
         outcomes = []
         for set_const in (False, True):

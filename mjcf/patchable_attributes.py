@@ -9,10 +9,13 @@ MUJOCO_VERSION = "4.0.0"
 # (tag, attribute) -> whether mj_setConst must run after the write.
 PROVEN: dict[tuple[str, str], bool] = {
     ("body", "gravcomp"): True,
+    ("body", "pos"): True,
+    ("body", "quat"): True,
     ("body", "user"): False,
     ("camera", "fovy"): False,
     ("camera", "ipd"): False,
     ("camera", "pos"): True,
+    ("camera", "quat"): True,
     ("camera", "user"): False,
     ("fixed", "damping"): False,
     ("fixed", "frictionloss"): False,
@@ -22,6 +25,7 @@ PROVEN: dict[tuple[str, str], bool] = {
     ("framepos", "cutoff"): False,
     ("framepos", "noise"): False,
     ("framepos", "user"): False,
+    ("general", "armature"): True,
     ("general", "biasprm"): False,
     ("general", "damping"): True,
     ("general", "dynprm"): False,
@@ -51,6 +55,7 @@ PROVEN: dict[tuple[str, str], bool] = {
     ("light", "bulbradius"): False,
     ("light", "cutoff"): False,
     ("light", "diffuse"): False,
+    ("light", "dir"): True,
     ("light", "exponent"): False,
     ("light", "intensity"): False,
     ("light", "pos"): True,
@@ -63,6 +68,7 @@ PROVEN: dict[tuple[str, str], bool] = {
     ("material", "shininess"): False,
     ("material", "specular"): False,
     ("material", "texrepeat"): False,
+    ("motor", "armature"): True,
     ("motor", "damping"): True,
     ("motor", "gear"): True,
     ("motor", "lengthrange"): False,
@@ -71,6 +77,8 @@ PROVEN: dict[tuple[str, str], bool] = {
     ("position", "gear"): True,
     ("position", "lengthrange"): False,
     ("position", "user"): False,
+    ("site", "pos"): True,
+    ("site", "quat"): True,
     ("site", "rgba"): False,
     ("site", "size"): False,
     ("site", "user"): False,
@@ -84,6 +92,7 @@ PROVEN: dict[tuple[str, str], bool] = {
     ("torque", "cutoff"): False,
     ("torque", "noise"): False,
     ("torque", "user"): False,
+    ("velocity", "armature"): True,
     ("velocity", "damping"): True,
     ("velocity", "gear"): True,
     ("velocity", "lengthrange"): False,
@@ -114,11 +123,6 @@ REFUSED: dict[tuple[str, str], str] = {
     ("ballquat", "cutoff"): "no model of the corpus has it",
     ("ballquat", "noise"): "no model of the corpus has it",
     ("ballquat", "user"): "no model of the corpus has it",
-    ("body", "pos"): "actuator_acc0, body_invweight0, cam_poscom0, data.M, data.cdof, "
-    "data.cinert ...",
-    ("body", "quat"): "(the changed model does not compile), actuator_acc0, "
-    "body_invweight0, body_quat, cam_poscom0, data.M ...",
-    ("camera", "quat"): "(the changed model does not compile)",
     ("camera", "sensorsize"): "(the changed model does not compile)",
     ("camprojection", "cutoff"): "no model of the corpus has it",
     ("camprojection", "noise"): "no model of the corpus has it",
@@ -203,14 +207,12 @@ REFUSED: dict[tuple[str, str], str] = {
     ("fromto", "noise"): "no model of the corpus has it",
     ("fromto", "user"): "no model of the corpus has it",
     ("general", "actrange"): "(the changed model does not compile)",
-    ("general", "armature"): "stat.meaninertia",
     ("general", "cranklength"): "(the changed model does not compile)",
     ("general", "ctrlrange"): "actuator_ctrllimited, data.actuator_force, data.qacc, "
     "data.qacc_smooth, data.qfrc_actuator, data.qfrc_smooth",
     ("general", "forcerange"): "actuator_forcelimited, data.actuator_force, data.qacc, "
     "data.qacc_smooth, data.qfrc_actuator, data.qfrc_smooth",
-    ("geom", "pos"): "(the changed model does not compile), body_inertia, body_ipos, "
-    "body_iquat, bvh_aabb, bvh_nodeid ...",
+    ("geom", "pos"): "body_inertia, body_ipos, body_iquat, bvh_aabb, bvh_nodeid, cam_poscom0 ...",
     ("geom", "quat"): "actuator_acc0, body_inertia, body_invweight0, body_iquat, bvh_aabb, "
     "data.M ...",
     ("gyro", "cutoff"): "no model of the corpus has it",
@@ -229,12 +231,11 @@ REFUSED: dict[tuple[str, str], str] = {
     ("intvelocity", "gear"): "no model of the corpus has it",
     ("intvelocity", "lengthrange"): "no model of the corpus has it",
     ("intvelocity", "user"): "no model of the corpus has it",
-    ("joint", "armature"): "dof_damping, jnt_stiffness, stat.meaninertia",
+    ("joint", "armature"): "dof_damping, jnt_stiffness",
     ("joint", "axis"): "actuator_acc0, body_invweight0, data.M, data.cacc, data.cdof, "
     "data.cfrc_int ...",
     ("joint", "damping"): "dof_damping",
-    ("joint", "pos"): "dof_damping, jnt_stiffness, stat.center, stat.extent, "
-    "stat.meaninertia, stat.meansize",
+    ("joint", "pos"): "dof_damping, jnt_stiffness",
     ("joint", "range"): "data.dof_island, data.efc_AR_rowadr, data.efc_AR_rownnz, "
     "data.efc_D, data.efc_J, data.efc_J_colind ...",
     ("joint", "stiffness"): "jnt_stiffness",
@@ -260,13 +261,11 @@ REFUSED: dict[tuple[str, str], str] = {
     ("key", "qpos"): "no model of the corpus has it",
     ("key", "qvel"): "no model of the corpus has it",
     ("key", "time"): "no model of the corpus has it",
-    ("light", "dir"): "light_dir",
     ("light", "specular"): "light_specular",
     ("magnetometer", "cutoff"): "no model of the corpus has it",
     ("magnetometer", "noise"): "no model of the corpus has it",
     ("magnetometer", "user"): "no model of the corpus has it",
     ("mesh", "scale"): "no model of the corpus has it",
-    ("motor", "armature"): "stat.meaninertia",
     ("motor", "cranklength"): "(the changed model does not compile)",
     ("motor", "ctrlrange"): "actuator_ctrllimited, data.actuator_force, data.efc_b, "
     "data.efc_force, data.efc_state, data.iacc ...",
@@ -312,7 +311,7 @@ REFUSED: dict[tuple[str, str], str] = {
     ("plugin", "gear"): "no model of the corpus has it",
     ("plugin", "lengthrange"): "no model of the corpus has it",
     ("plugin", "user"): "no model of the corpus has it",
-    ("position", "armature"): "dof_damping, jnt_stiffness, stat.meaninertia",
+    ("position", "armature"): "dof_damping, jnt_stiffness",
     ("position", "cranklength"): "(the changed model does not compile)",
     ("position", "ctrlrange"): "actuator_ctrllimited, data.actuator_force, data.efc_b, "
     "data.efc_force, data.efc_state, data.iacc ...",
@@ -321,8 +320,6 @@ REFUSED: dict[tuple[str, str], str] = {
     ("rangefinder", "cutoff"): "no model of the corpus has it",
     ("rangefinder", "noise"): "no model of the corpus has it",
     ("rangefinder", "user"): "no model of the corpus has it",
-    ("site", "pos"): "stat.center, stat.extent, tendon_lengthspring",
-    ("site", "quat"): "data.sensordata, data.site_xmat, data.site_xquat, site_quat",
     ("skin", "inflate"): "no model of the corpus has it",
     ("skin", "rgba"): "no model of the corpus has it",
     ("spatial", "armature"): "M_colind, M_rowadr, M_rownnz, body_invweight0, body_simple, "
@@ -369,7 +366,6 @@ REFUSED: dict[tuple[str, str], str] = {
     ("velocimeter", "cutoff"): "no model of the corpus has it",
     ("velocimeter", "noise"): "no model of the corpus has it",
     ("velocimeter", "user"): "no model of the corpus has it",
-    ("velocity", "armature"): "stat.meaninertia",
     ("velocity", "cranklength"): "(the changed model does not compile)",
     ("velocity", "ctrlrange"): "actuator_ctrllimited, data.actuator_force, data.cacc, "
     "data.cfrc_ext, data.cfrc_int, data.efc_force ...",

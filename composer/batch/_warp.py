@@ -2,9 +2,18 @@
 
 `import composer.batch` must work without the extra `[warp]` (so that its names can be
 documented and its errors tested); only building a batch environment imports Warp.
+
+Warp's native start-up prints "Warp CUDA warning: Could not find or load the NVIDIA CUDA
+driver..." to the process's stderr on a machine without one. Warp has no setting that skips
+looking for the driver, so unless a CUDA device was asked for, `load` runs Warp's start-up
+with stderr caught and passes on everything but that line: a user who asked for the CPU
+device (or for none: `default_device` then says which it took) is not told about a GPU
+they did not ask for.
 """
 
 import os
+import sys
+import tempfile
 from types import ModuleType
 
 #: The environment variable naming the directory for Warp's compiled kernels. Unset, Warp
@@ -15,9 +24,17 @@ _INSTALL_HINT = "composer.batch needs MuJoCo Warp: pip install 'mujoco-composer[
 
 _modules: tuple[ModuleType, ModuleType] | None = None
 
+# The line Warp's native start-up prints where no CUDA driver loads.
+_NO_DRIVER_WARNING = "Could not find or load the NVIDIA CUDA driver"
 
-def load() -> tuple[ModuleType, ModuleType]:
+
+def load(device: str | None = None) -> tuple[ModuleType, ModuleType]:
     """Returns `(warp, mujoco_warp)`, imported and initialised once.
+
+    Args:
+      device: the Warp device the caller will use, if it knows: unless it names a CUDA
+        device, Warp's warning that it found no CUDA driver is left out (see the module
+        docstring). Only the first call's initialises Warp.
 
     Returns:
       The `warp` module (logging warnings only, its kernel cache in
@@ -39,9 +56,38 @@ def load() -> tuple[ModuleType, ModuleType]:
         cache = os.environ.get(KERNEL_CACHE_ENV)
         if cache:
             warp.config.kernel_cache_dir = os.path.abspath(cache)
-        warp.init()
+        if device is not None and str(device).startswith("cuda"):
+            warp.init()
+        else:
+            _init_without_driver_warning(warp)
         _modules = (warp, mujoco_warp)
     return _modules
+
+
+def _init_without_driver_warning(warp: ModuleType) -> None:
+    """Runs `warp.init()` with the process's stderr (file descriptor 2, where Warp's native
+    code prints) caught, then writes what it printed back to stderr, less the no-driver
+    warning."""
+    try:
+        sys.stderr.flush()
+        saved = os.dup(2)
+    except (OSError, ValueError):
+        warp.init()  # no stderr descriptor to catch
+        return
+    with tempfile.TemporaryFile() as caught:
+        os.dup2(caught.fileno(), 2)
+        try:
+            warp.init()
+        finally:
+            sys.stderr.flush()
+            os.dup2(saved, 2)
+            os.close(saved)
+        caught.seek(0)
+        printed = caught.read().decode("utf-8", errors="replace")
+    kept = [line for line in printed.splitlines(True) if _NO_DRIVER_WARNING not in line]
+    if kept:
+        sys.stderr.write("".join(kept))
+        sys.stderr.flush()
 
 
 def is_available() -> bool:

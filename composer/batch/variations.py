@@ -25,7 +25,8 @@ Refused, with NotImplementedError naming the element and attribute (at construct
 where a producer first meets it): a change of the MJCF model's structure; an attribute the
 proof does not cover, with the proof's reason; any MJCF change when the table was proven on
 another MuJoCo release; a field that varies per world but that MuJoCo Warp shares between
-worlds.
+worlds. A refused attribute's message says how to draw it per world instead (a write of its
+compiled field in `initialize_episode`; `REFUSAL_DOCS`).
 
 The rule for producers: one producer's MJCF tree serves every world whose episodes it makes,
 so each episode must set every attribute that any episode varies (as `MJCFVariator` does: it
@@ -75,13 +76,34 @@ def _unpatchable_reason(element, attribute: str) -> str | None:
     why = table.refused.get(pair)
     if why is None:
         return "the proof does not cover it (its compiled value is not the attribute's)"
+    if " " not in why.split(",")[0]:
+        # The fields the proof found a write in place cannot make equal to a recompile's.
+        why = f"what the compiler derives from it differs from a write in place: {why}"
     return f"the proof refuses it: {why}"
+
+
+#: Where the docs say what to do about a refused variation.
+REFUSAL_DOCS = "docs/concepts/batch.md#what-to-do-about-a-refused-variation"
 
 
 def _refusal(element, attribute: str, reason: str) -> NotImplementedError:
     return NotImplementedError(
         f"{binding.describe(element)} attribute {attribute!r}, changed by "
-        f"initialize_episode_mjcf: {_RECOMPILE}; {reason}"
+        f"initialize_episode_mjcf: {_RECOMPILE}; {reason}. {_what_to_do(element, attribute)}"
+    )
+
+
+def _what_to_do(element, attribute: str) -> str:
+    """The documented way to draw `attribute` per world without a recompile."""
+    spec = element.spec.attributes.get(attribute)
+    if spec is None or binding.compiled_field(element, attribute) is None:
+        return f"Vary what it compiles into instead (see {REFUSAL_DOCS})"
+    return (
+        f"To draw it per world, write its compiled value in initialize_episode instead, "
+        f"which runs for every world with that world's generator, e.g. "
+        f"`physics.bind(element).{spec.python_name} = random_state.uniform(low, high)` or a "
+        f"PhysicsVariator bound to the element; what the compiler derives from it then "
+        f"stays as compiled, in the CPU environment as in the batch (see {REFUSAL_DOCS})"
     )
 
 
@@ -123,7 +145,9 @@ class EpisodeModel:
         if episode is None or changes is None:
             raise NotImplementedError(
                 "initialize_episode_mjcf changed the MJCF model's structure (an element added, "
-                f"removed or attached, or another change only a compile resolves): {_RECOMPILE}"
+                f"removed or attached, or another change only a compile resolves): {_RECOMPILE}. "
+                "Build every element any episode uses once, and vary its attributes per "
+                f"episode (see {REFUSAL_DOCS})"
             )
         if not changes:
             return

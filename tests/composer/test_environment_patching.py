@@ -30,6 +30,44 @@ class VariedTask(ReachTask):
         random_state.uniform()
 
 
+class MovingTask(ReachTask):
+    """Before every episode: a goal site, a welded post (a body without joints), the arm's
+    upper body (on a hinge) and the arm's tip site moved and turned, all drawn from the
+    environment's random stream (poses that patch)."""
+
+    def __init__(self):
+        super().__init__()
+        worldbody = self.arena.mjcf_model.worldbody
+        self.goal = worldbody.add("site", name="goal", pos=[0.3, 0, 0.01], size=[0.02])
+        self.post = worldbody.add("body", name="post", pos=[0.6, 0.2, 0])
+        self.post.add("geom", type="box", size=[0.02, 0.02, 0.2], pos=[0, 0, 0.2])
+
+    def initialize_episode_mjcf(self, random_state):
+        self.goal.pos = [*random_state.uniform(-0.4, 0.4, size=2), 0.01]
+        self.post.pos = [*random_state.uniform(0.5, 0.7, size=2), 0]
+        self.post.quat = [1, 0, 0, random_state.uniform(-1, 1)]
+        self.arm.mjcf_model.find("body", "upper").pos = [0, 0, random_state.uniform(0.4, 0.6)]
+        self.arm.tip.quat = [1, random_state.uniform(-1, 1), 0, 0]
+
+
+@pytest.mark.patch_table
+def test_moved_sites_and_bodies_patch_without_compiling_and_bit_identically(compiles):
+    patched_env = composer.Environment(MovingTask(), random_state=3)
+    compiled_env = composer.Environment(MovingTask(), random_state=3, patch_compiled_model=False)
+    compiles.clear()
+    patched = play_episodes(patched_env, 6, 10)
+    assert compiles == []  # every reset patched
+    compiled = play_episodes(compiled_env, 6, 10)
+    assert len(compiles) == 6  # dm_control's way: a compile per episode
+    assert_same_episodes(patched, compiled)
+    # The viewer's framing follows the moved things, as a recompile's does.
+    for name in ("center", "extent", "meaninertia"):
+        np.testing.assert_array_equal(
+            getattr(patched_env.physics.model.stat, name),
+            getattr(compiled_env.physics.model.stat, name),
+        )
+
+
 def test_twenty_seeded_episodes_are_bit_identical_with_patching_on_and_off():
     patched_env = composer.Environment(VariedTask(), random_state=3)
     compiled_env = composer.Environment(VariedTask(), random_state=3, patch_compiled_model=False)

@@ -311,3 +311,135 @@ def test_a_springdamper_set_after_a_size_patch_stops_the_next_one():
     count = root.modification_count
     peg.size = [0.0045, 0.002]
     assert not _patch(root, physics, count)
+
+
+def _assert_everything_equals_a_recompile(root, physics):
+    patched = _everything(physics.model.ptr)
+    compiled = _everything(mjcf.Physics.from_mjcf_model(root).model.ptr)
+    assert [name for name in compiled if patched[name] != compiled[name]] == []
+
+
+# A goal site on the world, and a site a spatial tendon with a derived rest length runs to.
+_SITES = """
+<mujoco model="sites">
+  <worldbody>
+    <site name="goal" pos="0.1 0.2 0"/>
+    <site name="anchor" pos="0 0 1"/>
+    <body name="slider" pos="0 0 0.2">
+      <joint name="x" type="slide" axis="1 0 0"/>
+      <geom size="0.05" mass="1"/>
+      <site name="hook" pos="0 0 0.05"/>
+    </body>
+  </worldbody>
+  <tendon>
+    <spatial name="cord" stiffness="10">
+      <site site="anchor"/>
+      <site site="hook"/>
+    </spatial>
+  </tendon>
+</mujoco>
+"""
+
+
+@pytest.mark.patch_table
+def test_a_moved_goal_site_patches_to_a_recompile_framing_statistics_included():
+    root = mjcf.from_xml_string(_SITES)
+    physics = mjcf.Physics.from_mjcf_model(root)
+    count = root.modification_count
+    root.find("site", "goal").pos = [1.5, -0.7, 0.3]
+    assert _patch(root, physics, count)
+    # The viewer's framing follows the goal, as a recompile's does.
+    assert physics.model.ptr.stat.center[0] > 0.5
+    _assert_everything_equals_a_recompile(root, physics)
+
+
+@pytest.mark.patch_table
+def test_a_moved_tendon_site_moves_the_tendons_derived_rest_length():
+    root = mjcf.from_xml_string(_SITES)
+    physics = mjcf.Physics.from_mjcf_model(root)
+    count = root.modification_count
+    root.find("site", "hook").pos = [0.3, 0, 0.05]
+    assert _patch(root, physics, count)
+    # anchor (0, 0, 1) to hook (0.3, 0, 0.25): the spring rests at that length.
+    np.testing.assert_allclose(physics.model.ptr.tendon_lengthspring[0], [0.8077747] * 2)
+    _assert_everything_equals_a_recompile(root, physics)
+
+
+@pytest.mark.patch_table
+def test_a_site_quaternion_is_normalised_as_the_compiler_does():
+    root = mjcf.from_xml_string(_SITES)
+    physics = mjcf.Physics.from_mjcf_model(root)
+    count = root.modification_count
+    root.find("site", "goal").quat = [2, 0, 0, 2]
+    assert _patch(root, physics, count)
+    np.testing.assert_allclose(physics.model.ptr.site_quat[0], [0.5**0.5, 0, 0, 0.5**0.5])
+    _assert_everything_equals_a_recompile(root, physics)
+
+
+_BODIES = """
+<mujoco model="bodies">
+  <worldbody>
+    <light name="lamp" pos="0 0 3" dir="0 0 -1"/>
+    <body name="wall" pos="0.5 0 0.1">
+      <geom type="box" size="0.02 0.3 0.1"/>
+      <camera name="eye" pos="0 0 0.2" xyaxes="0 1 0 0 0 1"/>
+    </body>
+    <body name="ball" pos="0 0 0.1">
+      <freejoint/>
+      <geom size="0.05"/>
+    </body>
+  </worldbody>
+</mujoco>
+"""
+
+
+@pytest.mark.patch_table
+def test_a_welded_bodys_pose_and_a_lights_direction_patch_to_a_recompile():
+    root = mjcf.from_xml_string(_BODIES)
+    physics = mjcf.Physics.from_mjcf_model(root)
+    count = root.modification_count
+    wall = root.find("body", "wall")
+    wall.pos = [0.7, -0.2, 0.1]
+    wall.quat = [1, 0, 0, 1]
+    root.find("light", "lamp").dir = [0, 1, -1]
+    assert _patch(root, physics, count)
+    np.testing.assert_allclose(physics.model.ptr.light_dir[0], [0, 0.5**0.5, -(0.5**0.5)])
+    _assert_everything_equals_a_recompile(root, physics)
+
+
+@pytest.mark.parametrize(
+    "change",
+    [
+        # A free body's qpos0 is its pose, which only the compiler sets.
+        lambda root: setattr(root.find("body", "ball"), "pos", [0.2, 0, 0.1]),
+        # A quaternion beside xyaxes: the compiler refuses the model.
+        lambda root: setattr(root.find("camera", "eye"), "quat", [1, 0, 0, 0]),
+    ],
+    ids=["free_body_pos", "second_orientation"],
+)
+@pytest.mark.patch_table
+def test_a_pose_only_a_compile_resolves_is_not_patched(change):
+    root = mjcf.from_xml_string(_BODIES)
+    physics = mjcf.Physics.from_mjcf_model(root)
+    count = root.modification_count
+    change(root)
+    assert not _patch(root, physics, count)
+
+
+@pytest.mark.patch_table
+def test_a_moving_body_in_a_model_with_springdamper_recompiles_and_a_welded_one_patches():
+    # springdamper's stiffness and damping come from the inertia of the joint's tree.
+    root = mjcf.from_xml_string(_BODIES)
+    arm = root.worldbody.add("body", name="arm", pos=[0, 0.5, 0.5])
+    arm.add("joint", name="hinge", axis=[0, 1, 0], springdamper=[0.5, 1])
+    link = arm.add("body", name="link", pos=[0.2, 0, 0])
+    link.add("geom", size=[0.05])
+    physics = mjcf.Physics.from_mjcf_model(root)
+    count = root.modification_count
+    link.pos = [0.3, 0, 0]
+    assert not _patch(root, physics, count)
+    physics = mjcf.Physics.from_mjcf_model(root)
+    count = root.modification_count
+    root.find("body", "wall").pos = [0.6, 0, 0.1]
+    assert _patch(root, physics, count)
+    _assert_everything_equals_a_recompile(root, physics)

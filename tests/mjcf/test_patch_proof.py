@@ -20,18 +20,23 @@ _BALL = "<mujoco><worldbody><body><freejoint/><geom size='0.1'/></body></worldbo
 
 
 @pytest.mark.patch_table
-def test_colour_and_geom_size_are_proven_and_positions_are_refused_with_their_fields():
+def test_colour_size_and_poses_are_proven_and_a_geoms_position_is_refused_with_its_fields():
+    pairs = {("geom", "rgba"), ("geom", "size"), ("geom", "pos"), ("body", "pos"), ("site", "pos")}
     proven, refused = patch_proof._verdicts(
         patch_proof.prove(
-            {("geom", "rgba"), ("geom", "size"), ("geom", "pos"), ("body", "pos")},
-            itertools.chain(suite_proof.task_models(), patch_proof.scene_models()),
+            pairs, itertools.chain(suite_proof.task_models(), patch_proof.scene_models())
         )
     )
-    # A size moves the body's inertia and the model's statistics: mj_setConst must follow.
-    assert proven == {("geom", "rgba"): False, ("geom", "size"): True}
-    # A geom's position moves its body's inertial frame; a body's, derived constants.
+    # A size moves the body's inertia and the model's statistics, a body's or a site's
+    # position the derived constants and statistics: mj_setConst must follow.
+    assert proven == {
+        ("geom", "rgba"): False,
+        ("geom", "size"): True,
+        ("body", "pos"): True,
+        ("site", "pos"): True,
+    }
+    # A geom's position moves its body's inertial frame, which only the compiler computes.
     assert "body_ipos" in refused["geom", "pos"]
-    assert "body_invweight0" in refused["body", "pos"]
 
 
 def test_candidates_are_float_attributes_of_compiled_objects():

@@ -74,6 +74,17 @@ def test_a_variation_of_an_unproven_attribute_is_refused_with_the_proofs_reason(
 
 
 @pytest.mark.patch_table
+def test_a_refused_variation_says_how_to_draw_it_per_world_instead():
+    task = _VariedReach(_floor, pos=lambda random_state: random_state.uniform(size=3))
+    with pytest.raises(NotImplementedError) as refused:
+        batch.BatchEnvironment(task, 2)
+    message = str(refused.value)
+    assert "write its compiled value in initialize_episode instead" in message
+    assert "`physics.bind(element).pos = random_state.uniform(low, high)`" in message
+    assert "docs/concepts/batch.md#what-to-do-about-a-refused-variation" in message
+
+
+@pytest.mark.patch_table
 def test_a_variation_the_proof_does_not_cover_is_refused_saying_so():
     task = _VariedReach(_floor, mass=lambda random_state: random_state.uniform(1.0, 2.0))
     with pytest.raises(
