@@ -212,7 +212,7 @@ def _define(wp) -> SimpleNamespace:
             s = column_source[c]
             source = wp.array(ptr=sources[s], shape=(source_sizes[s],), dtype=wp.float32)
             base = world * source_rows[s]
-            value = float(0.0)
+            value = wp.float32(0.0)
             for t in range(column_terms[c]):
                 value += column_weights[c, t] * source[base + column_entries[c, t]]
             op = column_op[c]
