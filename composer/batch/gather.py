@@ -94,8 +94,11 @@ class FieldGather:
         rows = self.field.view
         flat = rows.reshape(rows.shape[0], -1)
         if self._plain:
-            if rows.shape[0] == out.shape[0]:
-                np.take(flat, self.entries[:, 0], axis=1, out=out)
+            if self._slice is not None:
+                out[...] = flat[:, self._slice]
+            elif rows.shape[0] == out.shape[0]:
+                # "clip" (the entries are in range) writes straight into `out`, unbuffered.
+                np.take(flat, self.entries[:, 0], axis=1, out=out, mode="clip")
             else:  # a model field shared by every world
                 out[...] = flat[:, self.entries[:, 0]]
             return
@@ -107,10 +110,8 @@ class FieldGather:
             summed = np.einsum("wct,ct->wc", flat[:, self.entries], self.weights)
         out[...] = summed
         for function, columns in self._op_columns:
-            if isinstance(columns, slice):
-                function(summed[:, columns], out=out[:, columns])
-            else:
-                out[:, columns] = function(summed[:, columns])
+            # On contiguous values: NumPy's vectorised sin and cos skip strided ones.
+            out[:, columns] = function(np.ascontiguousarray(summed[:, columns]))
 
     def __call__(self) -> Any:
         """The value in every world, (num_envs, *value shape), in the batch's namespace."""
