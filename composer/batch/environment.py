@@ -310,6 +310,11 @@ class BatchEnvironment:
         self._final_observation: dict[str, Any] = {}
         self._started = False
         self._clock = clocks.STOPPED
+        task_type = type(self._batch_task)
+        self._default_discount = task_type.get_discount is BatchTask.get_discount
+        self._default_termination = (
+            task_type.should_terminate_episode is BatchTask.should_terminate_episode
+        )
 
     @property
     def step_clock(self) -> clocks.StepClock | None:
@@ -520,12 +525,24 @@ class BatchEnvironment:
             # These worlds were stepped with the others; their reset overwrites that step.
             self._start_episodes(restarting)
             clock.lap("start_episodes")
-        reward = xp.astype(task.get_reward(physics), xp.float32)
-        discount = xp.astype(task.get_discount(physics), xp.float32)
-        ended = xp.astype(task.should_terminate_episode(physics), xp.bool)
+        reward = xp.astype(task.get_reward(physics), xp.float32, copy=False)
+        # BatchTask's own discount (1) and termination (never) need no arrays of their own.
+        discount = (
+            self._one
+            if self._default_discount
+            else xp.astype(task.get_discount(physics), xp.float32, copy=False)
+        )
+        terminated = (
+            None
+            if self._default_termination
+            else xp.astype(task.should_terminate_episode(physics), xp.bool, copy=False)
+        )
         clock.lap("task")
         steps = xp.where(restarting, 0, self._steps + 1)
-        ended = (ended | (steps >= self._step_limit)) & ~restarting
+        ended = steps >= self._step_limit
+        if terminated is not None:
+            ended = ended | terminated
+        ended = ended & ~restarting
         step_type = xp.where(
             restarting,
             self._step_types[_FIRST],
