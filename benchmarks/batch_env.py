@@ -1,32 +1,32 @@
-"""Batched environments on MuJoCo Warp: throughput against raw batched stepping, the
-framework's time on the caller's thread, device-to-host copies and initial-state producers.
+"""Batched environments on MuJoCo Warp: throughput against raw batched stepping, where each
+control step's time goes, device-to-host copies, and the initial-state producers.
 
 Tasks: manipulation `reach_site_features` and `lift_brick_features` (`--tasks`), 20 physics
 steps per control step, zero actions. Throughputs are environment steps (control steps of
-one world) per second.
+one world) per second. Episodes (`--episodes`): at the tasks' own length ("own", 10 s, 250
+control steps) and/or at 1 s ("1"); `--stagger` spreads the episodes' starts (each world's
+step count drawn in [0, limit) after the first reset, as a training run has them after its
+first episodes); without it every world starts at once and the time limit ends them together.
 
-Table 1, for each task and num_envs:
-  batch/s: `BatchEnvironment.step`, resets included (worlds reset at the rate the time limit
-    `--time-limit` gives them: every 25 control steps by default, 10x the tasks' own 10 s).
-  raw/s: the same model on the same device, `mujoco_warp.step` n_sub_steps times per control
-    step, nothing else: the ceiling. overhead = raw / batch (goal on a GPU: <= 1.3 at 4096).
-  frame ms: the time `step` spends on the caller's thread outside MuJoCo Warp's physics
-    calls (`step`, `step1`, `step2`, `forward`, `set_state`, `get_state`, `reset_data`):
-    the framework's own cost per control step, resets at the benchmark's rate included;
-    steady ms: the same over the steps where no world started an episode; reset ms: what a
-    step where every world started one costs beyond that (on Warp's CPU device only).
-  d2h/step: calls per step that copy a device array to the host (Warp `.numpy()`/`.list()`,
-    torch `.cpu()`/`.item()`/...), counted over the run (on Warp's CPU device they cost no
-    copy, but would on CUDA): the refill's read of the episode counters, every 8 steps.
-  reused: episodes that started from a reused initial state / episodes started.
-Fit, least squares over the sizes: steady ms = fixed + µs per world-step * num_envs, the
-  same for a reset of all worlds, and both together at the tasks' natural reset rate (every
-  250 control steps; goal: <= 2 ms fixed, <= 0.25 µs per world-step).
-Table 2, the framework alone: `step` with MuJoCo Warp's physics calls replaced by no-ops,
-  `--framework-steps` steps at the tasks' own 10 s time limit (so every world resets once,
-  at its natural rate), for `--framework-envs`; fitted as fixed ms + µs per world-step
-  (goal: <= 2 ms fixed, <= 0.25 µs per world-step). The wall-clock difference of table 1
-  is the same quantity with the physics running, noisier by the physics' own variation.
+Table 1, throughput, for each task, episode length and num_envs (a run without timers):
+  batch/s: `BatchEnvironment.step`, resets included. raw/s: the same model on the same
+  device, `mujoco_warp.step` n_sub_steps times per control step, nothing else: the ceiling.
+  overhead = raw / batch (goal on a GPU: <= 1.3 at 4096).
+Table 2, the split: the same steps again with a `composer.batch.step_clock.StepClock`, which
+  synchronises the device after each part of `step` and reads the wall clock (no function is
+  patched; on CUDA the parts are the graphs and launches the step makes): ms per step of
+  each part (physics, start_episodes, task hooks, counters, observations, refill, action,
+  hand_out), `sum` of the parts and `wall` (the steps timed from outside; the parts cover
+  the step, so they add up to it), `wait` (the producer wait, from `initial_state_stats()`,
+  part of refill), d2h/step (device-to-host copies, `step_clock.HostCopies`: each would
+  synchronise on CUDA; the refill reads the episode counters every 8 steps), and
+  `frame` = wall - physics - the physics of start_episodes (its forward and state copies,
+  timed around MuJoCo Warp's calls on Warp's CPU device, where nothing is captured; on CUDA
+  they stay in start_episodes and in frame) - wait (the producers' pace, not the step's
+  work): the framework's own cost per control step.
+Fit, least squares over the sizes: frame ms = fixed + µs per world-step * num_envs (goal on
+  Warp's CPU device, episodes at the tasks' own length: <= 1 ms fixed, <= 0.25 µs per
+  world-step).
 Table 3: initial states per second of the producers (the CPU task's initializers), threads
   and processes, 1 and 2 workers.
 Baselines (`--baselines`), on this machine's cores: the threaded CPU vector env (one
@@ -34,12 +34,16 @@ Baselines (`--baselines`), on this machine's cores: the threaded CPU vector env 
   `mujoco.mj_step` on its own MjData); batch / ceiling is the speed-up over the CPU (goal on a
   GPU: >= 2 at the best num_envs).
 
+`--skip-physics` (Warp's CPU device only, where no graph is captured) replaces the physics
+sub-steps by nothing, so that a run long enough for episodes at their own length (300 steps:
+every world resets once) takes seconds; table 1 is then left out.
+
 Usage: python benchmarks/batch_env.py [--device cpu|cuda:0] [--num-envs 64,256]
   [--steps 50] [--tasks reach_site_features,lift_brick_features] [--namespace numpy|torch]
-  [--baselines] [--producer-states 64] [--state-workers 1] [--state-processes]
-  [--framework-envs 64,256,1024,4096] [--framework-steps 300]. On Warp's CPU device the
-  default num_envs are 64 and 256 (a control step of 256 lift worlds takes about half a
-  second there).
+  [--episodes own,1] [--stagger] [--skip-physics] [--state-workers 1] [--state-processes]
+  [--baselines] [--producer-states 64]. On Warp's CPU device the default num_envs are 64
+  and 256 (a control step of 256 lift worlds takes about half a second there); the framework
+  fit there: `--skip-physics --episodes own --steps 300`.
 """
 
 import argparse
@@ -65,31 +69,22 @@ import warp as wp  # noqa: E402
 
 import manipulation  # noqa: E402
 from composer import batch as composer_batch  # noqa: E402
-from composer.batch import initial_states  # noqa: E402
+from composer.batch import initial_states, step_clock  # noqa: E402
 from manipulation import batch  # noqa: E402
 from manipulation.tasks import registry  # noqa: E402
 
-# A manipulation episode: 10 s of 0.04 s control steps.
-_NATURAL_EPISODE_STEPS = 250
-
-_PHYSICS_CALLS = (
-    "step",
-    "step1",
-    "step2",
-    "forward",
-    "kinematics",
-    "set_state",
-    "get_state",
-    "reset_data",
-)
+# MuJoCo Warp's calls that start an episode (state copies, forward); the physics sub-steps
+# call others (step, step1, step2).
+_START_CALLS = ("forward", "kinematics", "set_state", "get_state", "reset_data")
 
 
-class _PhysicsClock:
-    """Accumulates the wall time spent inside MuJoCo Warp's physics calls (patched)."""
+class _StartPhysicsClock:
+    """Accumulates the wall time of MuJoCo Warp's calls that start episodes, by wrapping
+    them: on Warp's CPU device only, where `step` calls them (a CUDA graph would not)."""
 
     def __init__(self):
         self.seconds = 0.0
-        self._originals = {name: getattr(mjw, name) for name in _PHYSICS_CALLS}
+        self._originals = {name: getattr(mjw, name) for name in _START_CALLS}
         for name, original in self._originals.items():
             setattr(mjw, name, self._timed(original))
 
@@ -109,89 +104,81 @@ class _PhysicsClock:
             setattr(mjw, name, original)
 
 
-class _HostCopies:
-    """Counts calls that copy a device array to the host (patched while counting)."""
-
-    def __init__(self):
-        self.count = 0
-        self._originals = {(wp.array, "numpy"): wp.array.numpy, (wp.array, "list"): wp.array.list}
-        try:
-            import torch
-        except ImportError:
-            torch = None
-        if torch is not None:
-            for name in ("cpu", "numpy", "item", "tolist", "__bool__"):
-                self._originals[(torch.Tensor, name)] = getattr(torch.Tensor, name)
-        for (owner, name), original in self._originals.items():
-            setattr(owner, name, self._counted(original))
-
-    def _counted(self, original):
-        def counted(*args, **kwargs):
-            self.count += 1
-            return original(*args, **kwargs)
-
-        return counted
-
-    def restore(self) -> None:
-        for (owner, name), original in self._originals.items():
-            setattr(owner, name, original)
-
-
-def _batch_row(task: str, num_envs: int, args) -> dict:
+def _batch_row(task: str, num_envs: int, time_limit: float | None, args) -> dict:
+    """One env of `task`: its throughput (unless physics is skipped), then the split."""
     on_cpu = args.device == "cpu"
+    options = {} if time_limit is None else {"time_limit": time_limit}
     env = batch.load(
         task,
         num_envs,
         device=args.device,
         seed=0,
-        time_limit=args.time_limit,
         namespace=args.namespace,
         # Results stay on the device on CUDA; on the CPU NumPy's are the device's memory.
         array_type="numpy" if on_cpu else "torch",
         check_action_values=False,
         state_workers=args.state_workers,
         state_processes=args.state_processes,
+        **options,
     )
+    physics = env.physics
+    if args.skip_physics:
+        physics.step = lambda n_sub_steps=1: None
     env.reset()
     action = env.hand_out(np.zeros((num_envs, *env.action_spec().shape), np.float32))
-    physics = env.physics
-    # Compiles, captures graphs and warms caches, through one reset of every world.
-    n_sub_steps = env.task.task.physics_steps_per_control_step
-    limit = int(round(args.time_limit / (n_sub_steps * env.task.task.physics_timestep)))
-    for _ in range(limit + 2):
-        env.step(action)
-    wp.synchronize_device(physics.device)
-    clock, copies = _PhysicsClock(), _HostCopies()
-    framework = {True: [], False: []}  # by whether some world started an episode
-    try:
+    # Compiles kernels and captures graphs: a step, and a start of every world.
+    env.step(action)
+    env.episode_steps = np.full(num_envs, env.max_episode_steps - 1, np.int32)
+    env.step(action)
+    env.step(action)
+    limit = env.max_episode_steps
+    if args.stagger:
+        env.episode_steps = np.random.RandomState(0).randint(0, limit, num_envs).astype(np.int32)
+    else:
+        env.episode_steps = np.zeros(num_envs, np.int32)
+    row = {"steps": args.steps}
+    if not args.skip_physics:
+        env.synchronize()
         begin = time.perf_counter()
         for _ in range(args.steps):
-            inside, start = clock.seconds, time.perf_counter()
-            time_step = env.step(action)
-            spent = time.perf_counter() - start - (clock.seconds - inside)
-            # On the CPU the step types are host memory; on CUDA looking would synchronise.
-            framework[bool(on_cpu and time_step.first().any())].append(spent)
-        wp.synchronize_device(physics.device)
-        elapsed = time.perf_counter() - begin
+            env.step(action)
+        env.synchronize()
+        row["batch"] = args.steps * num_envs / (time.perf_counter() - begin)
+        row["raw"] = _raw_rate(physics, env.task.task.physics_steps_per_control_step, args.steps)
+    if not args.stagger:
+        env.episode_steps = np.zeros(num_envs, np.int32)
+    clock = step_clock.StepClock(env.synchronize)
+    before = env.initial_state_stats()
+    start_physics = _StartPhysicsClock() if on_cpu else None
+    try:
+        with step_clock.HostCopies() as copies:
+            env.step_clock = clock
+            env.synchronize()
+            begin = time.perf_counter()
+            for _ in range(args.steps):
+                env.step(action)
+            env.synchronize()
+            wall = time.perf_counter() - begin
+            env.step_clock = None
     finally:
-        clock.restore(), copies.restore()
-    stats = env.initial_state_stats()
+        if start_physics is not None:
+            start_physics.restore()
+    after = env.initial_state_stats()
     env.close()
-    raw = _raw_rate(physics, env.task.task.physics_steps_per_control_step, args.steps)
-    steady = 1e3 * float(np.mean(framework[False]))
-    resets = framework[True]
-    return {
-        "batch": args.steps * num_envs / elapsed,
-        "raw": raw,
-        "framework_ms": 1e3 * (elapsed - clock.seconds) / args.steps,
-        "steady_ms": steady,
-        # The framework's time of a step where every world started an episode, beyond a
-        # step where none did.
-        "reset_ms": 1e3 * float(np.mean(resets)) - steady if resets else None,
-        "d2h": copies.count / args.steps,
-        "reused": stats.reused,
-        "started": stats.started,
-    }
+    parts = clock.milliseconds_per_step()
+    wall_ms = 1e3 * wall / args.steps
+    start_ms = 0.0 if start_physics is None else 1e3 * start_physics.seconds / args.steps
+    wait_ms = 1e3 * (after.wait_seconds - before.wait_seconds) / args.steps
+    row.update(
+        parts=parts,
+        wall_ms=wall_ms,
+        wait_ms=wait_ms,
+        d2h=copies.count / args.steps,
+        frame_ms=wall_ms - parts["physics"] - start_ms - wait_ms,
+        started=after.started - before.started,
+        reused=after.reused - before.reused,
+    )
+    return row
 
 
 def _raw_rate(physics, n_sub_steps: int, steps: int) -> float:
@@ -303,55 +290,16 @@ def _fit(sizes, framework_ms) -> tuple[float, float]:
     return intercept, slope * 1e3
 
 
-def _framework_alone(task: str, num_envs: int, args) -> float:
-    """ms per control step of `BatchEnvironment.step` with MuJoCo Warp's physics calls
-    replaced by no-ops: the framework's own work on the caller's thread (observations,
-    rewards, counters, resets and their copies, refills), at the task's own time limit."""
-    env = batch.load(
-        task,
-        num_envs,
-        device=args.device,
-        seed=0,
-        array_type="numpy" if args.device == "cpu" else "torch",
-        namespace=args.namespace,
-        check_action_values=False,
-        state_workers=args.state_workers,
-        state_processes=args.state_processes,
-    )
-    env.reset()
-    action = env.hand_out(np.zeros((num_envs, *env.action_spec().shape), np.float32))
-    env.step(action)
-    originals = {name: getattr(mjw, name) for name in _PHYSICS_CALLS}
-    for name in _PHYSICS_CALLS:
-        setattr(mjw, name, lambda *args, **kwargs: None)
-    try:
-        wp.synchronize_device(env.physics.device)
-        begin = time.perf_counter()
-        for _ in range(args.framework_steps):
-            env.step(action)
-        wp.synchronize_device(env.physics.device)
-        return 1e3 * (time.perf_counter() - begin) / args.framework_steps
-    finally:
-        for name, original in originals.items():
-            setattr(mjw, name, original)
-        env.close()
-
-
-def _print_fit(task: str, sizes, rows) -> None:
-    """The steady framework time and a reset's, each as fixed + per world, and both at the
-    tasks' natural reset rate (every world once per `_NATURAL_EPISODE_STEPS` steps)."""
-    fixed, per_world = _fit(sizes, [row["steady_ms"] for row in rows])
-    line = f"{task:<22} steady: {fixed:.2f} ms fixed + {per_world:.3f} µs/world-step"
-    if all(row["reset_ms"] is not None for row in rows):
-        reset_fixed, reset_per_world = _fit(sizes, [row["reset_ms"] for row in rows])
-        natural_fixed = fixed + reset_fixed / _NATURAL_EPISODE_STEPS
-        natural_per_world = per_world + reset_per_world / _NATURAL_EPISODE_STEPS
-        line += (
-            f"; reset of all: {reset_fixed:.2f} ms + {reset_per_world:.2f} µs/world"
-            f"; at the natural rate: {natural_fixed:.2f} ms + {natural_per_world:.3f} "
-            "µs/world-step"
-        )
-    print(line)
+_SHORT = {
+    "physics": "phys",
+    "start_episodes": "start",
+    "task": "task",
+    "counters": "count",
+    "observations": "obs",
+    "refill": "refill",
+    "action": "action",
+    "hand_out": "out",
+}
 
 
 def main() -> None:
@@ -360,60 +308,62 @@ def main() -> None:
     parser.add_argument("--num-envs", default=None, help="comma-separated numbers of worlds")
     parser.add_argument("--steps", type=int, default=50, help="control steps per measurement")
     parser.add_argument("--tasks", default="reach_site_features,lift_brick_features")
-    parser.add_argument("--time-limit", type=float, default=1.0, help="seconds per episode")
+    parser.add_argument(
+        "--episodes", default="own,1", help="episode lengths: 'own' (the task's) and/or seconds"
+    )
+    parser.add_argument("--stagger", action="store_true", help="spread the episodes' starts")
+    parser.add_argument(
+        "--skip-physics", action="store_true", help="no physics sub-steps (CPU device only)"
+    )
     parser.add_argument("--namespace", default=None, help="task code on numpy or torch")
     parser.add_argument("--baselines", action="store_true", help="threaded CPU and mj_step")
     parser.add_argument("--state-workers", type=int, default=1, help="initial-state producers")
-    parser.add_argument(
-        "--framework-envs", default="64,256,1024,4096", help="num_envs of the framework table"
-    )
-    parser.add_argument(
-        "--framework-steps", type=int, default=300, help="steps per framework measurement"
-    )
     parser.add_argument(
         "--state-processes", action="store_true", help="producers in processes, not threads"
     )
     parser.add_argument("--producer-states", type=int, default=64, help="states per timing")
     args = parser.parse_args()
+    if args.skip_physics and args.device != "cpu":
+        parser.error("--skip-physics: Warp's CPU device only (a CUDA step replays graphs)")
     default_sizes = "64,256" if args.device == "cpu" else "1024,4096,8192"
     sizes = [int(n) for n in (args.num_envs or default_sizes).split(",")]
     tasks = args.tasks.split(",")
+    episodes = [None if e == "own" else float(e) for e in args.episodes.split(",")]
     producers = f"{args.state_workers} {'processes' if args.state_processes else 'threads'}"
     print(
-        f"producers {producers}, "
-        f"device {args.device}, namespace {args.namespace or 'default'}, {args.steps} steps per "
-        f"row, time limit {args.time_limit} s, {os.cpu_count()} cores, load average "
-        f"{os.getloadavg()[0]:.2f}"
+        f"producers {producers}, device {args.device}, namespace {args.namespace or 'default'}, "
+        f"{args.steps} steps per row, starts {'staggered' if args.stagger else 'together'}, "
+        f"physics {'skipped' if args.skip_physics else 'on'}, {os.cpu_count()} cores, "
+        f"load average {os.getloadavg()[0]:.2f}"
     )
+    parts = " ".join(f"{short:>6}" for short in _SHORT.values())
     print(
-        f"{'task':<22} {'num_envs':>8} {'batch/s':>9} {'raw/s':>9} {'overhead':>8} "
-        f"{'frame ms':>8} {'steady ms':>9} {'reset ms':>8} {'d2h/step':>8} {'reused':>11}"
+        f"{'task':<20} {'episode':>7} {'n':>5} {'batch/s':>8} {'raw/s':>8} {'ovh':>5} | {parts} "
+        f"{'sum':>6} {'wall':>6} {'wait':>6} {'frame':>6} {'d2h':>5} {'reused':>9}"
     )
     for task in tasks:
-        rows = [_batch_row(task, num_envs, args) for num_envs in sizes]
-        for num_envs, row in zip(sizes, rows):
-            reset = "-" if row["reset_ms"] is None else f"{row['reset_ms']:.2f}"
-            print(
-                f"{task:<22} {num_envs:>8} {row['batch']:>9.0f} {row['raw']:>9.0f} "
-                f"{row['raw'] / row['batch']:>8.2f} {row['framework_ms']:>8.2f} "
-                f"{row['steady_ms']:>9.2f} {reset:>8} {row['d2h']:>8.3f} "
-                f"{row['reused']:>5}/{row['started']:<5}"
-            )
-        if len(sizes) > 1:
-            _print_fit(task, sizes, rows)
-    print()
-    print(
-        f"framework alone (physics calls as no-ops), {args.framework_steps} steps, resets at the "
-        f"tasks' 10 s limit ({_NATURAL_EPISODE_STEPS} steps)"
-    )
-    print(f"{'task':<22} {'num_envs':>8} {'ms/step':>8}")
-    framework_sizes = [int(n) for n in args.framework_envs.split(",")]
-    for task in tasks:
-        times = [_framework_alone(task, n, args) for n in framework_sizes]
-        for num_envs, milliseconds in zip(framework_sizes, times):
-            print(f"{task:<22} {num_envs:>8} {milliseconds:>8.3f}")
-        fixed, per_world = _fit(framework_sizes, times)
-        print(f"{task:<22} fit: {fixed:.3f} ms fixed + {per_world:.4f} µs/world-step")
+        for seconds in episodes:
+            rows = [_batch_row(task, n, seconds, args) for n in sizes]
+            label = "own" if seconds is None else f"{seconds:g} s"
+            for n, row in zip(sizes, rows):
+                rates = (
+                    f"{row['batch']:>8.0f} {row['raw']:>8.0f} {row['raw'] / row['batch']:>5.2f}"
+                    if "batch" in row
+                    else f"{'-':>8} {'-':>8} {'-':>5}"
+                )
+                split = " ".join(f"{row['parts'][part]:>6.2f}" for part in _SHORT)
+                print(
+                    f"{task:<20} {label:>7} {n:>5} {rates} | {split} "
+                    f"{sum(row['parts'].values()):>6.2f} {row['wall_ms']:>6.2f} "
+                    f"{row['wait_ms']:>6.2f} {row['frame_ms']:>6.3f} {row['d2h']:>5.3f} "
+                    f"{row['reused']:>4}/{row['started']:<4}"
+                )
+            if len(sizes) > 1:
+                fixed, per_world = _fit(sizes, [row["frame_ms"] for row in rows])
+                print(
+                    f"{task:<20} {label:>7} frame fit: {fixed:.3f} ms fixed + "
+                    f"{per_world:.3f} µs/world-step"
+                )
     print()
     print(f"{'task':<22} {'producers':>12} {'workers':>7} {'states/s':>9}")
     for task in tasks:

@@ -12,6 +12,7 @@ from dm_env import specs
 import composer
 import mjcf
 from composer.batch import _warp, actions, arrays, refusals, variations
+from composer.batch import step_clock as clocks
 from composer.batch.initial_states import StateMaker, StateProducer
 from composer.batch.observables import BatchObservables
 from composer.batch.physics import BatchPhysics, device_model_fields
@@ -308,6 +309,32 @@ class BatchEnvironment:
         }
         self._final_observation: dict[str, Any] = {}
         self._started = False
+        self._clock = clocks.STOPPED
+        task_type = type(self._batch_task)
+        self._default_discount = task_type.get_discount is BatchTask.get_discount
+        self._default_termination = (
+            task_type.should_terminate_episode is BatchTask.should_terminate_episode
+        )
+
+    @property
+    def step_clock(self) -> clocks.StepClock | None:
+        """The `composer.batch.step_clock.StepClock` timing each part of `step`, or None
+        (the default: no timing, no synchronisation).
+
+        Set it to a new `StepClock(env.synchronize)` to time the steps that follow; each
+        part then ends with a wait for the device.
+        """
+        return None if self._clock is clocks.STOPPED else self._clock
+
+    @step_clock.setter
+    def step_clock(self, clock: clocks.StepClock | None) -> None:
+        if clock is not None and not isinstance(clock, clocks.StepClock):
+            raise ValueError(f"step_clock: expected a StepClock or None, got {clock!r}")
+        self._clock = clocks.STOPPED if clock is None else clock
+
+    def synchronize(self) -> None:
+        """Waits until every launch on the batch's device has finished."""
+        self._physics._wp.synchronize_device(self._physics.device)
 
     @property
     def cameras(self):
@@ -480,23 +507,42 @@ class BatchEnvironment:
           ValueError: for an action of the wrong shape or with NaN or infinity; nothing is
             stepped.
         """
+        clock = self._clock
+        clock.start()
         checked = actions.check_action(
             action, self._action_shape, self._arrays, check_values=self._check_action_values
         )
+        clock.lap("action")
         if not self._started:
             return self.reset()
         xp, physics, task = self.xp, self._physics, self._batch_task
         task.before_step(physics, checked)
+        clock.lap("task")
         physics.step(self._n_sub_steps)
+        clock.lap("physics")
         restarting = self._ended if not self._same_step else xp.zeros_like(self._ended)
         if not self._same_step:
             # These worlds were stepped with the others; their reset overwrites that step.
             self._start_episodes(restarting)
+            clock.lap("start_episodes")
+        reward = xp.astype(task.get_reward(physics), xp.float32, copy=False)
+        # BatchTask's own discount (1) and termination (never) need no arrays of their own.
+        discount = (
+            self._one
+            if self._default_discount
+            else xp.astype(task.get_discount(physics), xp.float32, copy=False)
+        )
+        terminated = (
+            None
+            if self._default_termination
+            else xp.astype(task.should_terminate_episode(physics), xp.bool, copy=False)
+        )
+        clock.lap("task")
         steps = xp.where(restarting, 0, self._steps + 1)
-        reward = xp.astype(task.get_reward(physics), xp.float32)
-        discount = xp.astype(task.get_discount(physics), xp.float32)
-        ended = xp.astype(task.should_terminate_episode(physics), xp.bool)
-        ended = (ended | (steps >= self._step_limit)) & ~restarting
+        ended = steps >= self._step_limit
+        if terminated is not None:
+            ended = ended | terminated
+        ended = ended & ~restarting
         step_type = xp.where(
             restarting,
             self._step_types[_FIRST],
@@ -504,20 +550,27 @@ class BatchEnvironment:
         )
         reward = xp.where(restarting, self._zero, reward)
         discount = xp.where(restarting, self._one, discount)
+        clock.lap("counters")
         observation = self._observables.read()
+        clock.lap("observations")
         if self._same_step:
             self._final_observation = observation
             self._start_episodes(ended)
             steps = xp.where(ended, 0, steps)
+            clock.lap("start_episodes")
             fresh = self._observables.read()
             observation = {
                 key: xp.where(_rows(xp, ended, value), fresh[key], value)
                 for key, value in observation.items()
             }
+            clock.lap("observations")
         self._steps, self._ended, self._discount = steps, ended, discount
         if self._slots is not None:
             self._slots.after_step()
-        return self._time_step(step_type, reward, discount, observation)
+        clock.lap("refill")
+        time_step = self._time_step(step_type, reward, discount, observation)
+        clock.lap("hand_out")
+        return time_step
 
     def close(self) -> None:
         """Stops the initial-state producers."""

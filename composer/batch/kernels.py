@@ -19,7 +19,8 @@ def kernels() -> SimpleNamespace:
 
     Returns:
       A namespace with `save_columns`, `restore_columns`, `copy_worlds`, `count_nonfinite`,
-      `contact_worlds`, `take_slots`, `count_episodes`, `static_geom_poses`, and the
+      `contact_worlds`, `take_slots`, `count_episodes`, `static_geom_poses`,
+      `gather_columns` (the observations, `composer.batch.observables`), and the
       camera images' `unpack_rgb`, `planar_depth` and `segmentation` (documented on each).
     """
     global _kernels
@@ -185,6 +186,43 @@ def _define(wp) -> SimpleNamespace:
         geom_xmat[world, geom] = quat_to_mat(rotation)
 
     @wp.kernel(module="unique")
+    def gather_columns(
+        sources: wp.array(dtype=wp.uint64),
+        source_rows: wp.array(dtype=wp.int32),
+        source_sizes: wp.array(dtype=wp.int32),
+        column_source: wp.array(dtype=wp.int32),
+        column_out: wp.array2d(dtype=wp.int32),
+        column_terms: wp.array(dtype=wp.int32),
+        column_entries: wp.array2d(dtype=wp.int32),
+        column_weights: wp.array2d(dtype=wp.float32),
+        column_op: wp.array(dtype=wp.int32),
+        slot: int,
+        out: wp.array2d(dtype=wp.float32),
+    ):
+        """Every observation entry (a column) of one world, into row `slot` of `out`.
+
+        Column c reads the float32 device array at address sources[column_source[c]]
+        (source_sizes entries, source_rows per world, 0 for a row shared by every world):
+        the sum of column_terms[c] entries column_entries[c, t] of the world's row, each
+        times column_weights[c, t], then sin (op 1), cos (op 2) or nothing (op 0). It goes
+        to out[slot, column_out[c, 0] + world * column_out[c, 1]].
+        """
+        world = wp.tid()
+        for c in range(column_source.shape[0]):
+            s = column_source[c]
+            source = wp.array(ptr=sources[s], shape=(source_sizes[s],), dtype=wp.float32)
+            base = world * source_rows[s]
+            value = wp.float32(0.0)
+            for t in range(column_terms[c]):
+                value += column_weights[c, t] * source[base + column_entries[c, t]]
+            op = column_op[c]
+            if op == 1:
+                value = wp.sin(value)
+            elif op == 2:
+                value = wp.cos(value)
+            out[slot, column_out[c, 0] + world * column_out[c, 1]] = value
+
+    @wp.kernel(module="unique")
     def unpack_rgb(
         packed: wp.array2d(dtype=wp.uint32),
         address: wp.array(dtype=int),
@@ -241,6 +279,7 @@ def _define(wp) -> SimpleNamespace:
         take_slots=take_slots,
         count_episodes=count_episodes,
         static_geom_poses=static_geom_poses,
+        gather_columns=gather_columns,
         unpack_rgb=unpack_rgb,
         planar_depth=planar_depth,
         segmentation=segmentation,

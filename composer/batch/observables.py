@@ -9,6 +9,10 @@ read through their public `selection`, the `MJCFSelection` their CPU reading use
 `batch_reader.register`. Camera observables (`MJCFCamera`) are rendered together, once
 per observation (`composer.batch.cameras`).
 
+Readers that are `composer.batch.gather.FieldGather`s (the MJCF features, and readers
+registered as such) are read together by one kernel launch; other readers are called one
+by one and their values copied.
+
 Only options that act on one sample are supported (a batch keeps no per-world buffers):
 `update_interval` 1, `buffer_size` 1, `delay` 0, no corruptor; a named aggregator is the
 identity on a buffer of one sample.
@@ -20,12 +24,13 @@ from typing import Any
 
 import numpy as np
 
+from composer.batch.gather import FieldGather, ObservationGather
 from composer.entity import RootBodyFeature
 from composer.observation.observable import base
 from composer.observation.observable.mjcf import MJCFCamera, MJCFFeature
 from composer.observation.observable.selection import MJCFSelection
 
-__all__ = ["BatchObservables", "FieldSelection", "batch_reader", "selection_reader"]
+__all__ = ["BatchObservables", "batch_reader", "selection_reader"]
 
 Reader = Callable[[], Any]
 
@@ -46,41 +51,7 @@ def batch_reader(observable: base.Observable, physics) -> Reader:
     )
 
 
-class FieldSelection:
-    """An observable that is a fixed selection of one field's entries in every world.
-
-    Calling it reads the selection on the device, in the batch's namespace: a view of a run
-    of consecutive entries, or a gather (`xp.take`) of others.
-
-    Args:
-      field: the batched MjModel/MjData field (`BatchPhysics.field`).
-      columns: int array, the flat indices into one world's field of the observation's
-        entries, in the shape of one world's observation.
-    """
-
-    def __init__(self, physics, field, columns: np.ndarray):
-        self._physics = physics
-        self._field = field
-        self._shape = columns.shape
-        flat = np.asarray(columns).ravel().astype(np.int64)
-        contiguous = flat.size and np.array_equal(flat, np.arange(flat[0], flat[0] + flat.size))
-        # A run of consecutive entries (a body's position, an arm's joints) is a slice: a
-        # view, where a gather would copy.
-        self._slice = slice(int(flat[0]), int(flat[0]) + flat.size) if contiguous else None
-        self._columns = None if contiguous else physics.arrays.asarray(flat)
-
-    def __call__(self):
-        xp, physics = self._physics.xp, self._physics
-        values = self._field.read()
-        flat = xp.reshape(values, (values.shape[0], -1))
-        if self._slice is not None:
-            taken = flat[:, self._slice]
-        else:
-            taken = xp.take(flat, self._columns, axis=1)
-        return xp.reshape(taken, (physics.num_envs, *self._shape))
-
-
-def selection_reader(selection: MJCFSelection, physics) -> FieldSelection:
+def selection_reader(selection: MJCFSelection, physics) -> FieldGather:
     """Returns a reader of `selection` in every world of `physics`.
 
     The batched twin of `selection.reader(host_physics)`: it reads the entries of
@@ -101,7 +72,7 @@ def selection_reader(selection: MJCFSelection, physics) -> FieldSelection:
     if not isinstance(index, (int, slice, np.integer)):
         index = physics.arrays.to_host(index)
     entries = np.arange(int(np.prod(field.c_shape))).reshape(field.c_shape)
-    return FieldSelection(physics, field, np.asarray(selection.select(entries[index])))
+    return FieldGather(physics, field, np.asarray(selection.select(entries[index]))[..., None])
 
 
 @batch_reader.register(MJCFFeature)
@@ -180,6 +151,13 @@ class BatchObservables:
         self._image_names = frozenset(cameras)
         self._add_buffer_axis = not strip_singleton_obs_buffer_dim
         self._xp = physics.xp
+        gathered = {
+            name: reader
+            for name, reader in self._readers.items()
+            if isinstance(reader, FieldGather) and reader.gatherable
+        }
+        self._gather = ObservationGather(physics, gathered) if gathered else None
+        self._called = {name: r for name, r in self._readers.items() if name not in gathered}
 
     @property
     def cameras(self):
@@ -205,10 +183,11 @@ class BatchObservables:
         xp = self._xp
         if self._cameras is not None:
             self._cameras.render()
-        observation = {}
-        for name, read in self._readers.items():
+        values = self._gather.read() if self._gather is not None else {}
+        for name, read in self._called.items():
             value = read()
             dtype = value.dtype if name in self._image_names else xp.float32
-            value = xp.astype(value, dtype, copy=True)
-            observation[name] = value[:, None, ...] if self._add_buffer_axis else value
-        return observation
+            values[name] = xp.astype(value, dtype, copy=True)
+        if not self._add_buffer_axis:
+            return {name: values[name] for name in self._readers}
+        return {name: values[name][:, None, ...] for name in self._readers}

@@ -64,3 +64,29 @@ def test_an_indexed_feature_reads_the_same_entries_in_every_world(env):
     feature = observable.MJCFFeature("qpos", joints)[::-1][1:3]
     qpos = np.asarray(env.physics.bind(joints).qpos)
     np.testing.assert_array_equal(np.asarray(batch_reader(feature, env.physics)()), qpos[:, [4, 3]])
+
+
+def test_kernel_gathered_observations_of_earlier_steps_stay_as_they_were(monkeypatch):
+    pytest.importorskip("torch", reason="torch is optional: pip install torch==2.13.0")
+    from composer.batch import gather
+
+    # Task code in torch: the observations come from the Warp gather kernel, into blocks
+    # cut from chunks; chunks of two reads make the run cross chunks.
+    monkeypatch.setattr(gather.ObservationGather, "CHUNK_BYTES", 1)
+    env = manipulation_batch.load("reach_site_features", 2, seed=1, array_type="torch")
+    rng = np.random.RandomState(0)
+    spec = env.action_spec()
+    kept, copies = [], []
+    for _ in range(5):
+        action = rng.uniform(spec.minimum, spec.maximum, (2, *spec.shape)).astype(np.float32)
+        observation = env.step(action).observation
+        kept.append(observation)
+        copies.append({key: value.clone() for key, value in observation.items()})
+    env.close()
+    for observation, copy in zip(kept, copies):
+        for key, value in copy.items():
+            np.testing.assert_array_equal(observation[key].numpy(), value.numpy(), err_msg=key)
+    # The steps moved the arm: a reused block would have shown a later step's angles.
+    assert not np.array_equal(
+        kept[1]["jaco_arm/joints_pos"].numpy(), kept[4]["jaco_arm/joints_pos"].numpy()
+    )

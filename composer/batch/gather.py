@@ -1,0 +1,256 @@
+"""Observations read by one kernel: every entry a fixed function of a few field entries.
+
+A `FieldGather` is a batched reader whose every entry is the sum of a few entries of one
+float32 field of a world, each times a fixed weight, optionally passed through sin or cos:
+an MJCF feature's selected entries (weight 1), a joint torque (a sensor's 3-vector on the
+joint's axis), a joint angle's sine and cosine. `ObservationGather` reads all of a batch's
+`FieldGather`s into a new block of device memory per read, so that a result the caller
+keeps is never written again (see `composer.batch.arrays`): with one launch of
+`kernels.gather_columns`, one thread per world, where task code runs in torch (CUDA, and
+`namespace="torch"` on Warp's CPU device); with one `numpy.take` per observable, written
+straight into the block, where it runs in NumPy (Warp's CPU device), because Warp's CPU
+kernels gather about six times slower than `numpy.take` (about 10 ns an entry against 1.5,
+measured on the development machine, 2026-11). Both execute the same plan, the
+`FieldGather`s' entries, weights and ops; the torch tests compare the two.
+
+Kernel blocks are cut from chunks of `ObservationGather.CHUNK_BYTES` (at least one read each):
+a chunk is allocated once per so many reads and stays alive while any of its reads is
+referenced. The kernel reads the fields at the addresses they had when the gather was made:
+MuJoCo Warp's arrays are allocated once, with the data and the model.
+"""
+
+from typing import Any
+
+import numpy as np
+
+from composer.batch import _warp, kernels
+
+__all__ = ["FieldGather", "ObservationGather"]
+
+#: `FieldGather` ops: the sum as it is, its sine, its cosine.
+OPS = {"identity": 0, "sin": 1, "cos": 2}
+
+
+class FieldGather:
+    """A reader of every world's value of one observable, a fixed function of one field.
+
+    Entry i of a world's value is `op[i](sum over t of weights[i, t] * row[entries[i, t]])`,
+    where `row` is the world's row of the field, flattened.
+
+    Args:
+      physics: the `BatchPhysics`.
+      field: the `FieldView` read.
+      entries: int array of shape (*value shape, terms): flat indices into a world's row.
+      weights: float array of the same shape (None: all ones).
+      ops: array of `OPS` names of the value's shape (None: "identity" everywhere).
+    """
+
+    def __init__(self, physics, field, entries, weights=None, ops=None):
+        entries = np.asarray(entries, dtype=np.int64)
+        if entries.ndim < 1:
+            raise ValueError(f"entries: expected an array ending in a terms axis, got {entries!r}")
+        self._physics = physics
+        self.field = field
+        self.shape = entries.shape[:-1]
+        self.entries = entries.reshape(-1, entries.shape[-1])
+        self.weights = (
+            np.ones(self.entries.shape, np.float32)
+            if weights is None
+            else np.asarray(weights, np.float32).reshape(self.entries.shape)
+        )
+        names = np.full(self.shape, "identity") if ops is None else np.asarray(ops)
+        unknown = sorted(set(names.ravel()) - set(OPS))
+        if unknown:
+            raise ValueError(f"ops: expected names among {list(OPS)}, got {unknown}")
+        self.ops = np.vectorize(OPS.__getitem__, otypes=[np.int32])(names).reshape(-1)
+        scalar = getattr(field.device_array.dtype, "_wp_scalar_type_", field.device_array.dtype)
+        #: Whether `ObservationGather` can read it (a float32 field on the device).
+        self.gatherable = scalar is _warp.load()[0].float32
+        flat = self.entries[:, 0]
+        plain = (
+            self.entries.shape[1] == 1 and not self.ops.any() and bool(np.all(self.weights == 1.0))
+        )
+        # A run of consecutive entries (a body's position, an arm's joints) read alone is a
+        # slice, a view, where a gather would copy.
+        self._slice = (
+            slice(int(flat[0]), int(flat[0]) + flat.size)
+            if plain and flat.size and np.array_equal(flat, np.arange(flat[0], flat[0] + flat.size))
+            else None
+        )
+        self._plain = plain
+        self._unit_weights = bool(np.all(self.weights == 1.0))
+        self._op_columns = [
+            (getattr(np, name), _as_slice(np.flatnonzero(self.ops == OPS[name])))
+            for name in ("sin", "cos")
+            if np.any(self.ops == OPS[name])
+        ]
+        self._device_entries = physics.arrays.asarray(self.entries.ravel())
+        self._device_weights = physics.arrays.asarray(self.weights)
+        self._device_ops = physics.arrays.asarray(self.ops)
+
+    def take_into(self, out) -> None:
+        """Writes the value in every world into `out`, a NumPy (num_envs, entries) array (the
+        NumPy namespace only)."""
+        rows = self.field.view
+        flat = rows.reshape(rows.shape[0], -1)
+        if self._plain:
+            if self._slice is not None:
+                out[...] = flat[:, self._slice]
+            elif rows.shape[0] == out.shape[0]:
+                # "clip" (the entries are in range) writes straight into `out`, unbuffered.
+                np.take(flat, self.entries[:, 0], axis=1, out=out, mode="clip")
+            else:  # a model field shared by every world
+                out[...] = flat[:, self.entries[:, 0]]
+            return
+        if self.entries.shape[1] == 1:
+            summed = np.take(flat, self.entries[:, 0], axis=1)
+            if not self._unit_weights:
+                summed *= self.weights[:, 0]
+        else:
+            summed = np.einsum("wct,ct->wc", flat[:, self.entries], self.weights)
+        out[...] = summed
+        for function, columns in self._op_columns:
+            # On contiguous values: NumPy's vectorised sin and cos skip strided ones.
+            out[:, columns] = function(np.ascontiguousarray(summed[:, columns]))
+
+    def __call__(self) -> Any:
+        """The value in every world, (num_envs, *value shape), in the batch's namespace."""
+        xp, physics = self._physics.xp, self._physics
+        values = self.field.read()
+        flat = xp.reshape(values, (values.shape[0], -1))
+        if self._slice is not None:
+            taken = flat[:, self._slice]
+        else:
+            taken = xp.take(flat, self._device_entries, axis=1)
+        if not self._plain:
+            taken = xp.reshape(taken, (physics.num_envs, *self.entries.shape))
+            taken = xp.sum(taken * self._device_weights, axis=-1)
+            taken = xp.where(
+                self._device_ops == OPS["sin"],
+                xp.sin(taken),
+                xp.where(self._device_ops == OPS["cos"], xp.cos(taken), taken),
+            )
+        return xp.reshape(taken, (physics.num_envs, *self.shape))
+
+
+def _as_slice(columns: np.ndarray) -> slice | np.ndarray:
+    """Evenly spaced `columns` as a slice (a view, where an index array copies)."""
+    if columns.size > 1:
+        steps = np.diff(columns)
+        if steps[0] > 0 and np.all(steps == steps[0]):
+            return slice(int(columns[0]), int(columns[-1]) + 1, int(steps[0]))
+    return columns
+
+
+class ObservationGather:
+    """Reads the `FieldGather`s of a batch's observables with one kernel launch.
+
+    Args:
+      physics: the `BatchPhysics`.
+      readers: the gathered observables' readers by key.
+    """
+
+    #: The size of the device memory blocks' chunks (each holds one read at least).
+    CHUNK_BYTES = 1 << 22
+
+    def __init__(self, physics, readers: dict[str, FieldGather]):
+        wp = _warp.load()[0]
+        self._wp = wp
+        self._physics = physics
+        n = physics.num_envs
+        sources: dict[int, int] = {}  # device address -> source index
+        pointers, rows, sizes = [], [], []
+        column_source, column_out, column_terms, column_op = [], [], [], []
+        terms = max(reader.entries.shape[1] for reader in readers.values())
+        entries, weights = [], []
+        self._layout: dict[str, tuple[int, int, tuple[int, ...]]] = {}
+        offset = 0
+        for name, reader in readers.items():
+            array = reader.field.device_array
+            index = sources.setdefault(array.ptr, len(pointers))
+            if index == len(pointers):
+                pointers.append(array.ptr)
+                entries_per_row = int(np.prod(reader.field.c_shape))
+                rows.append(entries_per_row if reader.field.per_world else 0)
+                sizes.append(array.capacity // 4)
+            width = reader.entries.shape[0]
+            for k in range(width):
+                column_source.append(index)
+                column_out.append((offset + k, width))
+                column_terms.append(reader.entries.shape[1])
+                column_op.append(reader.ops[k])
+                padded = np.zeros(terms, np.int32)
+                padded[: reader.entries.shape[1]] = reader.entries[k]
+                entries.append(padded)
+                padded = np.zeros(terms, np.float32)
+                padded[: reader.weights.shape[1]] = reader.weights[k]
+                weights.append(padded)
+            self._layout[name] = (offset, n * width, reader.shape)
+            offset += n * width
+        self._size = offset
+        self._reads_per_chunk = max(1, self.CHUNK_BYTES // (4 * max(offset, 1)))
+        device = physics.device
+
+        def put(values, dtype):
+            return wp.array(np.asarray(values), dtype=dtype, device=device)
+
+        self._inputs = [
+            put(np.asarray(pointers, np.uint64), wp.uint64),
+            put(np.asarray(rows, np.int32), wp.int32),
+            put(np.asarray(sizes, np.int32), wp.int32),
+            put(np.asarray(column_source, np.int32), wp.int32),
+            put(np.asarray(column_out, np.int32), wp.int32),
+            put(np.asarray(column_terms, np.int32), wp.int32),
+            put(np.stack(entries), wp.int32),
+            put(np.stack(weights), wp.float32),
+            put(np.asarray(column_op, np.int32), wp.int32),
+        ]
+        self._launch = None
+        self._chunk_view = None
+        self._next = self._reads_per_chunk  # the next read's row in the chunk
+        self._readers = readers
+        self._in_numpy = physics.arrays.library == "numpy"
+
+    def _new_chunk(self) -> None:
+        chunk, self._chunk_view = self._physics.arrays.empty(
+            (self._reads_per_chunk, self._size), np.float32
+        )
+        if self._launch is None:
+            self._launch = self._wp.launch(
+                kernels.kernels().gather_columns,
+                dim=self._physics.num_envs,
+                inputs=[*self._inputs, 0],
+                outputs=[chunk],
+                device=self._physics.device,
+                record_cmd=True,
+            )
+        else:
+            self._launch.set_param_by_name("out", chunk)
+        self._next = 0
+
+    def read(self) -> dict[str, Any]:
+        """Every gathered observable of every world, by key, in new device memory.
+
+        Returns:
+          Arrays of the batch's namespace, (num_envs, *value shape), float32.
+        """
+        n = self._physics.num_envs
+        if self._in_numpy:
+            block = np.empty(self._size, np.float32)
+            values = {}
+            for name, (offset, size, shape) in self._layout.items():
+                rows = block[offset : offset + size].reshape((n, size // n))
+                self._readers[name].take_into(rows)
+                values[name] = rows.reshape((n, *shape))
+            return values
+        if self._next == self._reads_per_chunk:
+            self._new_chunk()
+        row = self._next
+        self._next += 1
+        self._launch.set_param_by_name("slot", row)
+        self._launch.launch()
+        block = self._chunk_view[row]
+        return {
+            name: block[offset : offset + size].reshape((n, *shape))
+            for name, (offset, size, shape) in self._layout.items()
+        }
