@@ -64,7 +64,16 @@ def cache_path(mujoco_version: str | None = None) -> Path:
       `~/.cache` where `XDG_CACHE_HOME` is unset or empty.
     """
     version = mujoco.__version__ if mujoco_version is None else mujoco_version
-    root = os.environ.get("XDG_CACHE_HOME") or str(Path.home() / ".cache")
+    environ = os.environ
+    return _cache_path(version, environ.get("XDG_CACHE_HOME"), environ.get("HOME"))
+
+
+@functools.cache
+def _cache_path(version: str, xdg_cache_home: str | None, home: str | None) -> Path:
+    # Keyed by the variables the path is made of: building it costs more than a patched
+    # reset's own work, and `current` runs at every reset that patches.
+    del home  # part of the key only: `Path.home()` reads it
+    root = xdg_cache_home or str(Path.home() / ".cache")
     return Path(root) / _DISTRIBUTION / "patch_proof" / f"mujoco-{version}.json"
 
 
@@ -76,7 +85,10 @@ def current() -> ProvenTable | None:
       The `ProvenTable`, or None when no proof applies (then nothing patches; the first
       call of the process with that outcome warns, naming `PROOF_COMMAND`).
     """
-    return _lookup(mujoco.__version__, patchable_attributes.MUJOCO_VERSION, cache_path())
+    installed, table_version = mujoco.__version__, patchable_attributes.MUJOCO_VERSION
+    if installed == table_version:
+        return _checked_in_table(table_version)
+    return _lookup(installed, table_version, cache_path())
 
 
 def write_cache(proven: dict[Pair, bool], refused: dict[Pair, str]) -> Path:
@@ -106,14 +118,17 @@ def write_cache(proven: dict[Pair, bool], refused: dict[Pair, str]) -> Path:
 
 
 @functools.cache
+def _checked_in_table(table_version: str) -> ProvenTable:
+    return ProvenTable(
+        table_version,
+        patchable_attributes.PROVEN,
+        patchable_attributes.REFUSED,
+        "mjcf/patchable_attributes.py",
+    )
+
+
+@functools.cache
 def _lookup(installed: str, table_version: str, path: Path) -> ProvenTable | None:
-    if installed == table_version:
-        return ProvenTable(
-            table_version,
-            patchable_attributes.PROVEN,
-            patchable_attributes.REFUSED,
-            "mjcf/patchable_attributes.py",
-        )
     if not path.exists():
         _warn(
             f"mjcf: the MJCF attributes a reset may write into the compiled model are "
