@@ -2,7 +2,7 @@
 Warp's CPU device, in environment steps (control steps of one world) per second.
 
 The task is the docs' own: the blocks of docs/own_task.md up to "Run it" and the blocks of
-docs/batch_own_task.md that define `PushPuckOnDevice` and `BatchPushPuck`, run here as
+docs/batch_own_task.md that define `make_task` and `BatchPushPuck`, run here as
 written. Random actions, a 4 s time limit (episodes restart), one producer thread.
 
 Usage: python benchmarks/batch_own_task.py [--num-envs 16,64] [--steps 40]
@@ -20,7 +20,7 @@ import numpy as np
 
 DOCS = pathlib.Path(__file__).resolve().parents[1] / "docs"
 _FENCE = re.compile(r"^```(?P<info>[^\n`]*)\n(?P<code>.*?)^```\s*$", re.M | re.S)
-_DEFINES = ("class PushPuckOnDevice", "class BatchPushPuck")
+_DEFINES = ("def make_task", "class BatchPushPuck")
 
 
 def _task_namespace() -> dict:
