@@ -21,7 +21,7 @@ and taking it back, counted with `sys.setprofile`); and the threaded env's speed
 GIL switch intervals of 5 ms (CPython's default), 0.5 ms and 0.05 ms, over the loop's.
 
 Last, a model of c cores (default 16): a vector step takes
-  max(ceil(N / c) * (M + P), N * P) + (c - 1) * h
+  max(ceil(N / c) * (M + P), N * P) + (min(N, c) - 1) * h
 (M: MuJoCo time per sub-env step, P: its Python time, which holds the GIL and so runs
 one thread at a time, h: one hand-off), against N * (M + P) for a loop.
 
@@ -224,7 +224,7 @@ def modelled_speedup(
 ) -> float:
     serial = num_envs * python_us
     parallel = math.ceil(num_envs / cores) * (mujoco_us + python_us)
-    step = max(parallel, serial) + (cores - 1) * hand_off_us
+    step = max(parallel, serial) + (min(num_envs, cores) - 1) * hand_off_us
     return num_envs * (mujoco_us + python_us) / step
 
 
