@@ -1,6 +1,9 @@
 """Gymnasium adapter overhead and vector env throughput, as ratios from one run.
 
-Task: manipulation `lift_brick_features` (20 physics steps per control step).
+Tasks: manipulation tasks named by `--tasks` (default `lift_brick_features`, 20 physics
+steps per control step); the adapter, GIL and free-ceiling rows use the first one, the
+throughput table is printed for each (a vision task's steps render its cameras; its
+lock-step ceiling is still raw `mj_step` only).
 
 Rows:
   GIL held: CPU time per adapter step that is Python rather than MuJoCo, and the
@@ -10,8 +13,9 @@ Rows:
   threaded N: `ThreadedVectorEnv` of N sub-environments (one thread per core, the
     calling one included) in environment steps per second / one `GymnasiumEnv` stepped
     in a loop, both with autoreset (targets: >= 0.97x at N = 1); the same for
-    `gymnasium.vector.AsyncVectorEnv` (one process per sub-environment), and
-    threaded / async.
+    `gymnasium.vector.AsyncVectorEnv` (one process per sub-environment) and
+    `gymnasium.vector.SyncVectorEnv` (the sub-environments in turn, in the calling
+    thread) over the same sub-environments, and threaded / async.
   free ceiling: one thread per core, each calling raw `mj_step(model, data, 20)` on its
     own `MjData` with no hand-off at all / one thread doing the same calls.
   lock-step ceiling N: a plain script, no environment: k = min(N, cores) threads (the
@@ -36,10 +40,11 @@ of cores and the 1-minute load average are printed with the tables: on a machine
 shared with other work the ratios are noisy.
 
 Usage: python benchmarks/vector_env.py [--steps N] [--repeats K] [--sizes 1,2,4,8]
-    [--no-ray] [--envs-per-actor 1,2,4,8]
+    [--tasks lift_brick_features,reach_site_vision] [--no-ray] [--envs-per-actor 1,2,4,8]
 """
 
 import argparse
+import functools
 import importlib.util
 import math
 import os
@@ -66,8 +71,8 @@ _CEILING_TARGET = 0.95  # threaded / loop over the lock-step ceiling, at N = 4 a
 _RAY_TARGET = 1.5  # Ray's cost per vector step over an empty actor round trip
 
 
-def _make_env() -> GymnasiumEnv:
-    return GymnasiumEnv(manipulation.load(_TASK))
+def _make_env(task: str = _TASK) -> GymnasiumEnv:
+    return GymnasiumEnv(manipulation.load(task))
 
 
 def _actions(space: gymnasium.Space, count: int, seed: int) -> list:
@@ -75,22 +80,22 @@ def _actions(space: gymnasium.Space, count: int, seed: int) -> list:
     return [space.sample() for _ in range(count)]
 
 
-def _episode_steps() -> int:
+def _episode_steps(task: str) -> int:
     """The steps of one episode of the task before its time limit ends it."""
-    env = manipulation.load(_TASK)
+    env = manipulation.load(task)
     steps = math.ceil(env.time_limit / env.control_timestep()) - 1
     env.close()
     return steps
 
 
-def adapter_ratio(steps: int, repeats: int) -> float:
+def adapter_ratio(task: str, steps: int, repeats: int) -> float:
     """Median over trials of (adapter step time) / (dm_env step time).
 
     Two environments seeded alike take the same actions, so they pass through the same
     states; their steps alternate, so load from other processes hits both alike.
     """
-    gym_env = _make_env()
-    dm = manipulation.load(_TASK)
+    gym_env = _make_env(task)
+    dm = manipulation.load(task)
     actions = _actions(gym_env.action_space, steps, seed=0)
     clock = time.perf_counter
     ratios = []
@@ -119,14 +124,16 @@ def adapter_ratio(steps: int, repeats: int) -> float:
     return statistics.median(ratios)
 
 
-def python_share(steps: int, repeats: int) -> tuple[float, float]:
+def python_share(task: str, steps: int, repeats: int) -> tuple[float, float]:
     """CPU microseconds per `GymnasiumEnv.step`, and how many of them are Python.
 
     The Python part (the GIL is held) is the step's CPU time less that of the same
-    `mj_step2`, `mj_step(19)`, `mj_step1` calls from the same states. CPU time of this
-    thread is used, so that waiting for a core does not count.
+    `mj_step2`, `mj_step(n - 1)`, `mj_step1` calls from the same states (n physics
+    steps per control step). CPU time of this thread is used, so that waiting for a
+    core does not count.
     """
-    gym_env = _make_env()
+    gym_env = _make_env(task)
+    _, sub_steps = _load_model(task)
     physics = gym_env.dm_env.physics
     model, data = physics.model.ptr, physics.data.ptr
     twin = mujoco.MjData(model)
@@ -144,7 +151,7 @@ def python_share(steps: int, repeats: int) -> tuple[float, float]:
         for action in actions:
             twin.ctrl[:] = action
             mujoco.mj_step2(model, twin)
-            mujoco.mj_step(model, twin, 19)
+            mujoco.mj_step(model, twin, sub_steps - 1)
             mujoco.mj_step1(model, twin)
         raw = clock() - start
         totals.append(total / steps * 1e6)
@@ -153,9 +160,9 @@ def python_share(steps: int, repeats: int) -> tuple[float, float]:
     return statistics.median(totals), statistics.median(pythons)
 
 
-def _load_model() -> tuple[mujoco.MjModel, int]:
+def _load_model(task: str) -> tuple[mujoco.MjModel, int]:
     """The task's model and its physics steps per control step."""
-    env = manipulation.load(_TASK)
+    env = manipulation.load(task)
     model = env.physics.model.ptr
     sub_steps = round(env.control_timestep() / env.physics.timestep())
     env.close()
@@ -165,8 +172,8 @@ def _load_model() -> tuple[mujoco.MjModel, int]:
 class LockStepCeiling:
     """Raw `mj_step` on N `MjData`: one thread, and k threads in lock step (Barrier)."""
 
-    def __init__(self, num_envs: int, threads: int, steps: int):
-        self.model, self.sub_steps = _load_model()
+    def __init__(self, task: str, num_envs: int, threads: int, steps: int):
+        self.model, self.sub_steps = _load_model(task)
         self.datas = [mujoco.MjData(self.model) for _ in range(num_envs)]
         self.threads = threads
         self.steps = steps
@@ -211,10 +218,10 @@ class LockStepCeiling:
         return statistics.median(self.ratios)
 
 
-def free_ceiling(threads: int, steps: int, repeats: int) -> float:
+def free_ceiling(task: str, threads: int, steps: int, repeats: int) -> float:
     """Steps/s of `threads` threads each running raw mj_step on its own `MjData`, free of
     any hand-off, / steps/s of one thread."""
-    model, sub_steps = _load_model()
+    model, sub_steps = _load_model(task)
     datas = [mujoco.MjData(model) for _ in range(threads)]
 
     def run(data):
@@ -269,40 +276,47 @@ def _round_trip_rate(actors: list, steps: int) -> float:
     return steps / (time.perf_counter() - start)
 
 
-def _ray_vector_env(num_envs: int, envs_per_actor: int, cpus_per_actor: int) -> RayVectorEnv:
+def _ray_vector_env(
+    task: str, num_envs: int, envs_per_actor: int, cpus_per_actor: int
+) -> RayVectorEnv:
     # An actor steps its sub-environments on as many threads as it has CPUs (at least 1).
     envs = RayVectorEnv(
-        [_make_env] * num_envs, envs_per_actor=envs_per_actor, num_cpus_per_actor=cpus_per_actor
+        [functools.partial(_make_env, task)] * num_envs,
+        envs_per_actor=envs_per_actor,
+        num_cpus_per_actor=cpus_per_actor,
     )
     envs.reset(seed=0)
     return envs
 
 
 class Throughput:
-    """Environment steps per second of one loop, a threaded and an async vector env, the
-    lock-step ceiling for N sub-environments, and with `use_ray` a Ray vector env of one
-    actor per core and as many empty actors."""
+    """Environment steps per second of one loop, a threaded, an async and a sync vector
+    env, the lock-step ceiling for N sub-environments of `task`, and with `use_ray` a Ray
+    vector env of one actor per core and as many empty actors."""
 
-    def __init__(self, num_envs: int, steps: int, use_ray: bool, cores: int):
+    def __init__(self, task: str, num_envs: int, steps: int, use_ray: bool, cores: int):
         self.num_envs = num_envs
         self.steps = steps
-        self.ceiling = LockStepCeiling(num_envs, min(num_envs, cores), steps)
-        self.single = _make_env()
+        make = functools.partial(_make_env, task)
+        self.ceiling = LockStepCeiling(task, num_envs, min(num_envs, cores), steps)
+        self.single = make()
         self.single.reset(seed=0)
-        self.threaded = ThreadedVectorEnv([_make_env] * num_envs)
+        self.threaded = ThreadedVectorEnv([make] * num_envs)
         self.threaded.reset(seed=0)
-        self.asynchronous = gymnasium.vector.AsyncVectorEnv([_make_env] * num_envs)
+        self.asynchronous = gymnasium.vector.AsyncVectorEnv([make] * num_envs)
         self.asynchronous.reset(seed=0)
+        self.synchronous = gymnasium.vector.SyncVectorEnv([make] * num_envs)
+        self.synchronous.reset(seed=0)
         self.single_actions = _actions(self.single.action_space, steps, seed=1)
         self.vector_actions = _actions(self.threaded.action_space, steps, seed=2)
-        self.rates = {"loop": [], "threaded": [], "async": []}
+        self.rates = {"loop": [], "threaded": [], "async": [], "sync": []}
         self.ray = None
         if use_ray:
             import ray
 
             self.envs_per_actor = math.ceil(num_envs / cores)
             # No CPU reservation: the actors of every N live at once, on `cores` cores.
-            self.ray = _ray_vector_env(num_envs, self.envs_per_actor, cpus_per_actor=0)
+            self.ray = _ray_vector_env(task, num_envs, self.envs_per_actor, cpus_per_actor=0)
             echo = ray.remote(_Echo).options(num_cpus=0)
             self.echoes = [echo.remote() for _ in self.ray.actors]
             _round_trip_rate(self.echoes, 1)  # the actors have started
@@ -314,6 +328,7 @@ class Throughput:
         self.rates["loop"].append(_loop_rate(self.single, self.single_actions))
         self.rates["threaded"].append(_vector_rate(self.threaded, self.vector_actions))
         self.rates["async"].append(_vector_rate(self.asynchronous, self.vector_actions))
+        self.rates["sync"].append(_vector_rate(self.synchronous, self.vector_actions))
         if self.ray is not None:
             self.rates["ray"].append(_vector_rate(self.ray, self.vector_actions))
             self.rates["round trip"].append(_round_trip_rate(self.echoes, self.steps))
@@ -341,6 +356,7 @@ class Throughput:
         self.single.close()
         self.threaded.close()
         self.asynchronous.close()
+        self.synchronous.close()
         if self.ray is not None:
             import ray
 
@@ -361,7 +377,13 @@ def main() -> None:
     parser.add_argument("--steps", type=int, default=100, help="vector steps per trial")
     parser.add_argument("--repeats", type=int, default=5, help="trials per measurement")
     parser.add_argument("--sizes", default="1,2,4,8", help="numbers of sub-environments")
+    parser.add_argument(
+        "--tasks", default=_TASK, help="manipulation tasks, one throughput table each"
+    )
     parser.add_argument("--no-ray", action="store_true", help="leave out the Ray rows")
+    parser.add_argument(
+        "--no-overhead", action="store_true", help="leave out the adapter, GIL and free rows"
+    )
     parser.add_argument(
         "--envs-per-actor",
         default="1,2,4,8",
@@ -377,45 +399,60 @@ def main() -> None:
         # "local": a new Ray of this machine, whatever an earlier run left behind.
         ray.init(address="local", num_cpus=cores, include_dashboard=False, log_to_driver=False)
 
+    tasks = args.tasks.split(",")
     print(
-        f"task {_TASK}, {cores} cores, 1-minute load average {os.getloadavg()[0]:.2f} "
+        f"tasks {tasks}, {cores} cores, 1-minute load average {os.getloadavg()[0]:.2f} "
         f"at the start; {args.repeats} trials of {args.steps} vector steps, medians"
     )
+    if not args.no_overhead:
+        _print_overheads(tasks[0], args, cores)
+    for task in tasks:
+        benches = [Throughput(task, size, args.steps, use_ray, cores) for size in sizes]
+        for _ in range(args.repeats):
+            for bench in benches:
+                bench.trial()
+        print(f"\n{task}: 1-minute load average after the trials {os.getloadavg()[0]:.2f}\n")
+        _print_throughput_table(benches)
+        if use_ray:
+            _print_ray_table(benches)
+            _print_envs_per_actor(task, max(sizes), args, cores)
+        for bench in benches:
+            bench.close()
+
+
+def _print_overheads(task: str, args: argparse.Namespace, cores: int) -> None:
+    """The adapter, GIL and free-ceiling rows, for `task`."""
     # The adapter and GIL rows run one episode per trial: no more steps than it has.
-    episode_steps = _episode_steps()
-    adapter = adapter_ratio(min(args.steps * 2, episode_steps), args.repeats)
+    episode_steps = _episode_steps(task)
+    adapter = adapter_ratio(task, min(args.steps * 2, episode_steps), args.repeats)
     verdict = "ok" if adapter <= _ADAPTER_TARGET else "MISSED"
     print(
-        f"adapter: GymnasiumEnv.step / Environment.step = {adapter:.3f} "
+        f"{task} adapter: GymnasiumEnv.step / Environment.step = {adapter:.3f} "
         f"(target <= {_ADAPTER_TARGET}: {verdict})"
     )
-    total, python = python_share(min(args.steps * 2, episode_steps), args.repeats)
+    total, python = python_share(task, min(args.steps * 2, episode_steps), args.repeats)
     print(
         f"GIL held: {python:.1f} of {total:.0f} CPU us per step are Python "
-        f"({python / total:.0%}); Amdahl bound for 2 threads "
-        f"{1 / (python / total + (1 - python / total) / 2):.2f}x"
+        f"({python / total:.0%}); Amdahl bound for {cores} threads "
+        f"{1 / (python / total + (1 - python / total) / cores):.2f}x"
     )
-    free = free_ceiling(cores, args.steps * 2, args.repeats)
+    free = free_ceiling(task, cores, args.steps * 2, args.repeats)
     print(f"free ceiling: {cores} threads of raw mj_step, no hand-off / 1 thread = {free:.2f}x")
 
-    benches = [Throughput(size, args.steps, use_ray, cores) for size in sizes]
-    for _ in range(args.repeats):
-        for bench in benches:
-            bench.trial()
-    print(f"\n1-minute load average after the trials: {os.getloadavg()[0]:.2f}\n")
+
+def _print_throughput_table(benches: list[Throughput]) -> None:
     rows = []
     for bench in benches:
-        loop, threaded, asynchronous = (bench.median(n) for n in ("loop", "threaded", "async"))
+        rates = (bench.median(n) for n in ("loop", "threaded", "async", "sync"))
         rows.append(
             (
                 f"{bench.num_envs}",
-                f"{loop:.0f}",
-                f"{threaded:.0f}",
-                f"{asynchronous:.0f}",
+                *(f"{rate:.0f}" for rate in rates),
                 f"{bench.ratio('threaded', 'loop'):.2f}x",
                 f"{bench.ceiling.median():.2f}x",
                 f"{bench.of_ceiling():.0%}",
                 f"{bench.ratio('async', 'loop'):.2f}x",
+                f"{bench.ratio('sync', 'loop'):.2f}x",
                 f"{bench.ratio('threaded', 'async'):.2f}x",
             )
         )
@@ -425,10 +462,12 @@ def main() -> None:
             "loop steps/s",
             "threaded steps/s",
             "async steps/s",
+            "sync steps/s",
             "threaded/loop",
             "lock-step ceiling",
             "threaded of ceiling",
             "async/loop",
+            "sync/loop",
             "threaded/async",
         ),
         rows,
@@ -437,11 +476,6 @@ def main() -> None:
         f"\ntargets: threaded/loop >= {_SINGLE_TARGET}x at N = 1; threaded >= "
         f"{_CEILING_TARGET:.0%} of the lock-step ceiling at N = 4 and 8"
     )
-    if use_ray:
-        _print_ray_table(benches)
-        _print_envs_per_actor(max(sizes), args, cores)
-    for bench in benches:
-        bench.close()
 
 
 def _print_ray_table(benches: list[Throughput]) -> None:
@@ -481,7 +515,7 @@ def _print_ray_table(benches: list[Throughput]) -> None:
     print(f"\ntarget: Ray's cost per vector step <= {_RAY_TARGET}x an empty round trip")
 
 
-def _print_envs_per_actor(num_envs: int, args: argparse.Namespace, cores: int) -> None:
+def _print_envs_per_actor(task: str, num_envs: int, args: argparse.Namespace, cores: int) -> None:
     """Throughput of `num_envs` sub-environments for each of `--envs-per-actor`: actors
     reserve the machine's cores among them (at least one each), one thread per core."""
     counts = [int(c) for c in args.envs_per_actor.split(",") if int(c) <= num_envs]
@@ -489,7 +523,7 @@ def _print_envs_per_actor(num_envs: int, args: argparse.Namespace, cores: int) -
     for count in counts:
         actors = math.ceil(num_envs / count)
         cpus = max(1, cores // actors) if actors <= cores else 0
-        envs = _ray_vector_env(num_envs, count, cpus_per_actor=cpus)
+        envs = _ray_vector_env(task, num_envs, count, cpus_per_actor=cpus)
         actions = _actions(envs.action_space, args.steps, seed=3)
         rates = [_vector_rate(envs, actions) for _ in range(args.repeats)]
         envs.close()

@@ -15,7 +15,7 @@ the many small observation arrays on its own, which costs more than the pickling
 pickle than the plain values of a whole step): its actions arrive as the bytes of one
 buffer of the action space's `FlatLayout` (`StepCall`); the sub-environments write their
 observations into one buffer of the observation space's (a `GymnasiumEnv` straight into
-its row, see `attach_row`), and the reply carries that buffer's bytes and the rest of
+its row, see `rows.attach_row`), and the reply carries that buffer's bytes and the rest of
 each outcome as a plain tuple (`StepReply`).
 """
 
@@ -29,9 +29,9 @@ import numpy as np
 from gymnasium.vector import AutoresetMode
 
 from composer.gym.flat_layout import FlatBatch, FlatLayout
+from composer.gym.rows import attach_row
 from composer.gym.sub_env_vector import (
     SubEnvironmentError,
-    attach_row,
     check_spaces_match,
     step_sub_env,
 )

@@ -37,7 +37,7 @@ import gymnasium
 import numpy as np
 
 from composer.gym import spec_spaces
-from composer.gym.sub_env_vector import row_writer
+from composer.gym.rows import row_writer
 from composer.utils import argument_checks
 
 __all__ = ["GymnasiumEnv"]

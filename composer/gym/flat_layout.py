@@ -16,7 +16,7 @@ import gymnasium
 import numpy as np
 from gymnasium.vector.utils import create_empty_array
 
-from composer.gym.sub_env_vector import row_views, row_writer
+from composer.gym.rows import row_views, row_writer
 
 __all__ = ["FlatBatch", "FlatLayout", "leaves"]
 

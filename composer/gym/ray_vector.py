@@ -58,12 +58,12 @@ from composer.gym._ray_host import (
     unpack,
 )
 from composer.gym.flat_layout import FlatBatch, FlatLayout, leaves
+from composer.gym.rows import read_row
 from composer.gym.sub_env_vector import (
     SubEnvironmentError,
     SubEnvOutcome,
     SubEnvVectorEnv,
     check_spaces_match,
-    read_row,
     reset_sub_env,
     step_sub_env,
 )

@@ -8,7 +8,7 @@ plain module functions of the sub-environment and picklable arguments, so a back
 runs sub-environments in other threads, processes or machines calls the same ones.
 
 Observations are written once, straight into their batch rows: a backend gives each
-sub-environment that is a `GymnasiumEnv` its row (`attach_row`), views of the batched
+sub-environment that is a `GymnasiumEnv` its row (`rows.attach_row`), views of the batched
 arrays that it writes its observations into and returns; any other sub-environment's
 observation is copied into its row when its outcome is stored.
 
@@ -33,17 +33,14 @@ import numpy as np
 from gymnasium.vector import AutoresetMode, VectorEnv
 from gymnasium.vector.utils import batch_space, create_empty_array, iterate
 
+from composer.gym.rows import batch_copier, copied, row_views, row_writer
+
 __all__ = [
     "SubEnvVectorEnv",
     "SubEnvOutcome",
     "SubEnvironmentError",
-    "attach_row",
     "call_sub_env",
     "check_spaces_match",
-    "copied",
-    "read_row",
-    "row_views",
-    "row_writer",
     "reset_sub_env",
     "step_sub_env",
 ]
@@ -137,91 +134,6 @@ def _close_sub_env(env: gymnasium.Env) -> None:
     env.close()
 
 
-def attach_row(env: gymnasium.Env, row: Any) -> None:
-    """Makes `env` write its observations into `row` and return it, if it is a
-    `GymnasiumEnv` (not wrapped: a wrapper may keep or change what it returns)."""
-    from composer.gym.env import GymnasiumEnv  # imports dm_env: only where one runs
-
-    if isinstance(env, GymnasiumEnv):
-        env.write_observations_to(row)
-
-
-def _batch_copier(batch) -> Callable[[], Any]:
-    """A function returning a copy of `batch` (an array, or dict/tuple of them).
-
-    Built once per vector env: walking the structure anew on every step costs twice
-    as much, and it runs on every step of every vector env.
-    """
-    if isinstance(batch, dict):
-        kind = type(batch)
-        parts = [(key, _batch_copier(part)) for key, part in batch.items()]
-        return lambda: kind({key: copy() for key, copy in parts})
-    if isinstance(batch, tuple):
-        copiers = [_batch_copier(part) for part in batch]
-        return lambda: tuple(copy() for copy in copiers)
-    return batch.copy
-
-
-def row_views(batch, index: int):
-    """Row `index` of a batched observation (array, or dict/tuple of them), as views.
-
-    A row of a batch of scalars is a 0-d array, so that it can be written in place.
-    """
-    if isinstance(batch, dict):
-        return type(batch)((key, row_views(part, index)) for key, part in batch.items())
-    if isinstance(batch, tuple):
-        return tuple(row_views(part, index) for part in batch)
-    return batch[index, ...]
-
-
-def copied(observation):
-    """`observation` (an array, or dict/tuple of them) with every array copied."""
-    if isinstance(observation, dict):
-        return type(observation)((key, copied(part)) for key, part in observation.items())
-    if isinstance(observation, tuple):
-        return tuple(copied(part) for part in observation)
-    return observation.copy() if isinstance(observation, np.ndarray) else observation
-
-
-def read_row(batch, index: int):
-    """A copy of row `index` of a batched observation (array, or dict/tuple of them)."""
-    return copied(row_views(batch, index))
-
-
-def row_writer(row) -> Callable[[Any], None]:
-    """A function `write(value)` that copies `value` into `row` (the views `row_views`
-    returns), built once per row: assigning to a kept view costs half as much as
-    indexing the batch anew."""
-    if isinstance(row, dict):
-        # Arrays are assigned here rather than by a writer each, which saves a Python
-        # call per array on every step.
-        arrays = [(key, part) for key, part in row.items() if isinstance(part, np.ndarray)]
-        nested = [
-            (key, row_writer(part)) for key, part in row.items() if not isinstance(part, np.ndarray)
-        ]
-
-        def write_dict(value) -> None:
-            for key, view in arrays:
-                view[...] = value[key]
-            for key, write_part in nested:
-                write_part(value[key])
-
-        return write_dict
-    if isinstance(row, tuple):
-        writers = [row_writer(part) for part in row]
-
-        def write_tuple(value) -> None:
-            for write_part, item in zip(writers, value):
-                write_part(item)
-
-        return write_tuple
-
-    def write_array(value) -> None:
-        row[...] = value
-
-    return write_array
-
-
 class SubEnvVectorEnv(VectorEnv):
     """A `VectorEnv` of `num_envs` sub-environments reached through `_map`.
 
@@ -264,10 +176,10 @@ class SubEnvVectorEnv(VectorEnv):
         self.observation_space = batch_space(single_observation_space, num_envs)
         self.action_space = batch_space(single_action_space, num_envs)
         self._observations = create_empty_array(single_observation_space, num_envs, fn=np.zeros)
-        # Row i's views are what sub-environment i writes into (see `attach_row`).
+        # Row i's views are what sub-environment i writes into (see `rows.attach_row`).
         self._rows = [row_views(self._observations, i) for i in range(num_envs)]
         self._row_writers = [row_writer(row) for row in self._rows]
-        self._copy_observations = _batch_copier(self._observations)
+        self._copy_observations = batch_copier(self._observations)
         self._rewards = np.zeros(num_envs, dtype=np.float64)
         self._terminations = np.zeros(num_envs, dtype=np.bool_)
         self._truncations = np.zeros(num_envs, dtype=np.bool_)

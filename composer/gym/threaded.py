@@ -13,7 +13,8 @@ from typing import Any
 import gymnasium
 from gymnasium.vector import AutoresetMode
 
-from composer.gym.sub_env_vector import SubEnvVectorEnv, attach_row, check_spaces_match
+from composer.gym.rows import attach_row
+from composer.gym.sub_env_vector import SubEnvVectorEnv, check_spaces_match
 from composer.gym.thread_pool import PinnedThreadPool
 
 __all__ = ["ThreadedVectorEnv"]

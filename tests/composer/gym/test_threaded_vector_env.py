@@ -397,3 +397,25 @@ def test_vision_sub_envs_render_their_cameras_on_worker_threads():
     assert images.dtype == np.uint8
     assert images.std() > 0  # a picture of the scene, not a blank buffer
     envs.close()
+
+
+def test_vision_frames_from_worker_threads_equal_those_of_a_plain_loop():
+    # Each sub-environment renders on its own thread with its own GL context; the frames
+    # must be those one thread rendering the same episodes in turn would give.
+    def make():
+        return GymnasiumEnv(manipulation.load("reach_site_vision"))
+
+    envs = ThreadedVectorEnv([make] * 2, num_threads=2)
+    loop = [make() for _ in range(2)]
+    actions = np.random.default_rng(0).uniform(-0.5, 0.5, (2, 2, 9)).astype(np.float32)
+    observations, _ = envs.reset(seed=3)
+    expected = [env.reset(seed=3 + i)[0]["front_close"] for i, env in enumerate(loop)]
+    np.testing.assert_array_equal(observations["front_close"], np.stack(expected))
+    for step_actions in actions:
+        observations, *_ = envs.step(step_actions)
+        expected = [env.step(a)[0]["front_close"] for env, a in zip(loop, step_actions)]
+        np.testing.assert_array_equal(observations["front_close"], np.stack(expected))
+    assert observations["front_close"].std() > 0
+    envs.close()
+    for env in loop:
+        env.close()

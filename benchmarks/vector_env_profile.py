@@ -1,0 +1,289 @@
+"""Where a `ThreadedVectorEnv` step's time goes, and what many cores would give.
+
+Task: `--task` (default manipulation's `reach_site_features`). For each N of `--sizes`,
+a `ThreadedVectorEnv` of N sub-environments on k = min(N, cores) threads is stepped
+`--steps` times with every sub-environment step timed where it runs; per vector step:
+
+  wake-up us: from the caller entering the pool to a worker starting its first
+    sub-environment (the hand-off), mean over workers and steps (and the least seen:
+    the hand-off without load, which the model uses);
+  barrier wait us: from a thread finishing its share to the last one finishing (what
+    each thread waits at the end-of-step barrier), mean over threads;
+  straggler us: the last share's end less the median share's end;
+  step us: the whole vector step; and the threaded / loop speed-up next to the
+    barrier-synchronised raw ceiling (k threads of raw `mj_step` on the N datas, in lock
+    step through the same pool; no Python of the environment at all).
+
+Then, from one sub-environment stepped alone: its CPU time, the part that is MuJoCo
+(`mj_step*` calls timed on this thread) and the rest (Python, the GIL held); the GIL
+releases per sub-environment step (calls into `mujoco` and ctypes, each releasing the GIL
+and taking it back, counted with `sys.setprofile`); and the threaded env's speed at
+GIL switch intervals of 5 ms (CPython's default), 0.5 ms and 0.05 ms, over the loop's.
+
+Last, a model of c cores (default 16): a vector step takes
+  max(ceil(N / c) * (M + P), N * P) + (min(N, c) - 1) * h
+(M: MuJoCo time per sub-env step, P: its Python time, which holds the GIL and so runs
+one thread at a time, h: one hand-off), against N * (M + P) for a loop.
+
+Usage: python benchmarks/vector_env_profile.py [--task T] [--sizes 4,16,32] [--steps N]
+    [--model-cores 16]
+"""
+
+import argparse
+import collections
+import functools
+import math
+import os
+import pathlib
+import statistics
+import sys
+import time
+
+# `import manipulation` finds the package rather than benchmarks/manipulation.py.
+_HERE = pathlib.Path(__file__).resolve().parent
+sys.path = [entry for entry in sys.path if pathlib.Path(entry or ".").resolve() != _HERE]
+
+import mujoco  # noqa: E402
+import numpy as np  # noqa: E402
+
+import manipulation  # noqa: E402
+from composer.gym import GymnasiumEnv, ThreadedVectorEnv  # noqa: E402
+from composer.gym.sub_env_vector import step_sub_env  # noqa: E402
+
+
+def _make_env(task: str) -> GymnasiumEnv:
+    return GymnasiumEnv(manipulation.load(task))
+
+
+class _Timings:
+    """Start and end (perf_counter) of each sub-environment's part of one vector step."""
+
+    def __init__(self, size: int):
+        self.starts = np.zeros(size)
+        self.ends = np.zeros(size)
+
+    def timed_step(self, index: int, env, action, mode, episode_over):
+        self.starts[index] = time.perf_counter()
+        outcome = step_sub_env(env, action, mode, episode_over)
+        self.ends[index] = time.perf_counter()
+        return outcome
+
+
+def profile_steps(task: str, num_envs: int, steps: int) -> dict[str, float]:
+    """Per-vector-step wake-up, barrier wait, straggler and step time (us), and the
+    threaded / loop speed-up, for `num_envs` sub-environments."""
+    envs = ThreadedVectorEnv([functools.partial(_make_env, task)] * num_envs)
+    envs.reset(seed=0)
+    k = envs.num_threads
+    timings = _Timings(num_envs)
+    rng = np.random.default_rng(0)
+    shape = envs.single_action_space.shape
+    mode = envs.autoreset_mode
+    wake, wait, straggle, total = [], [], [], []
+    for _ in range(steps):
+        actions = rng.uniform(-1, 1, (num_envs, *shape)).astype(np.float32)
+        ended = envs._episode_over.tolist()
+        arguments = {i: (actions[i], mode, ended[i]) for i in range(num_envs)}
+        begin = time.perf_counter()
+        envs._map(
+            lambda env, i, *rest: timings.timed_step(i, env, *rest),
+            {i: (i, *arguments[i]) for i in arguments},
+            envs._store,
+        )
+        finish = time.perf_counter()
+        share_ends = [timings.ends[s::k].max() for s in range(k)]
+        last = max(share_ends)
+        wake.extend(timings.starts[s::k].min() - begin for s in range(1, k))
+        wait.extend(last - end for end in share_ends)
+        straggle.append(last - statistics.median(share_ends))
+        total.append(finish - begin)
+    envs.close()
+    us = 1e6
+    return {
+        "threads": k,
+        "wake": statistics.mean(wake) * us if wake else 0.0,
+        "wake_min": min(wake) * us if wake else 0.0,
+        "wait": statistics.mean(wait) * us,
+        "straggler": statistics.median(straggle) * us,
+        "step": statistics.median(total) * us,
+    }
+
+
+def loop_step_us(task: str, steps: int) -> float:
+    env = _make_env(task)
+    env.reset(seed=0)
+    rng = np.random.default_rng(1)
+    actions = rng.uniform(-1, 1, (steps, *env.action_space.shape)).astype(np.float32)
+    start = time.perf_counter()
+    for action in actions:
+        _, _, terminated, truncated, _ = env.step(action)
+        if terminated or truncated:
+            env.reset()
+    elapsed = time.perf_counter() - start
+    env.close()
+    return elapsed / steps * 1e6
+
+
+def raw_ceiling(task: str, num_envs: int, steps: int) -> float:
+    """Raw `mj_step` on `num_envs` datas through the threaded env's pool, in lock step
+    / the same calls on one thread."""
+    env = manipulation.load(task)
+    model = env.physics.model.ptr
+    sub_steps = round(env.control_timestep() / env.physics.timestep())
+    env.close()
+    datas = [mujoco.MjData(model) for _ in range(num_envs)]
+    start = time.perf_counter()
+    for _ in range(steps):
+        for data in datas:
+            mujoco.mj_step(model, data, sub_steps)
+    single = time.perf_counter() - start
+    # A vector env of raw stepping: the pool is the threaded env's own.
+    envs = ThreadedVectorEnv([functools.partial(_make_env, task)] * num_envs)
+    pool = envs._pool
+
+    def step(i: int) -> None:
+        mujoco.mj_step(model, datas[i], sub_steps)
+
+    indices = range(num_envs)
+    start = time.perf_counter()
+    for _ in range(steps):
+        pool.run(step, indices)
+    pooled = time.perf_counter() - start
+    envs.close()
+    return single / pooled
+
+
+def split_step(task: str, steps: int) -> tuple[float, float, float]:
+    """CPU us per sub-environment step: total, MuJoCo's (timed mj_step* calls), and the
+    GIL releases per step (calls into mujoco or ctypes)."""
+    env = _make_env(task)
+    env.reset(seed=0)
+    action = np.zeros(env.action_space.shape, env.action_space.dtype)
+    mujoco_time = [0.0]
+    originals = {name: getattr(mujoco, name) for name in ("mj_step", "mj_step1", "mj_step2")}
+
+    def timed(function, *args):
+        start = time.thread_time()
+        function(*args)
+        mujoco_time[0] += time.thread_time() - start
+
+    calls = collections.Counter()
+
+    def count(frame, event, arg):
+        if event == "c_call":
+            module = (
+                getattr(arg, "__module__", None) or type(getattr(arg, "__self__", None)).__module__
+            )
+            calls[str(module).split(".")[0]] += 1
+
+    sys.setprofile(count)
+    for _ in range(10):
+        env.step(action)
+    sys.setprofile(None)
+    gil_releases = (calls["mujoco"] + calls["_ctypes"]) / 10
+    for name, function in originals.items():
+        setattr(mujoco, name, functools.partial(timed, function))
+    try:
+        start = time.thread_time()
+        for _ in range(steps):
+            _, _, terminated, truncated, _ = env.step(action)
+            if terminated or truncated:
+                env.reset()
+        total = time.thread_time() - start
+    finally:
+        for name, function in originals.items():
+            setattr(mujoco, name, function)
+    env.close()
+    return total / steps * 1e6, mujoco_time[0] / steps * 1e6, gil_releases
+
+
+def switch_interval_speedups(task: str, num_envs: int, steps: int) -> dict[float, float]:
+    """Threaded / loop at several GIL switch intervals (CPython's `sys.setswitchinterval`)."""
+    default = sys.getswitchinterval()
+    out = {}
+    envs = ThreadedVectorEnv([functools.partial(_make_env, task)] * num_envs)
+    envs.reset(seed=0)
+    actions = np.zeros((num_envs, *envs.single_action_space.shape), np.float32)
+    try:
+        for interval in (0.005, 0.0005, 0.00005):
+            sys.setswitchinterval(interval)
+            loop = loop_step_us(task, steps)
+            start = time.perf_counter()
+            for _ in range(steps):
+                envs.step(actions)
+            threaded = (time.perf_counter() - start) / steps / num_envs * 1e6
+            out[interval] = loop / threaded
+    finally:
+        sys.setswitchinterval(default)
+        envs.close()
+    return out
+
+
+def modelled_speedup(
+    num_envs: int, cores: int, mujoco_us: float, python_us: float, hand_off_us: float
+) -> float:
+    serial = num_envs * python_us
+    parallel = math.ceil(num_envs / cores) * (mujoco_us + python_us)
+    step = max(parallel, serial) + (min(num_envs, cores) - 1) * hand_off_us
+    return num_envs * (mujoco_us + python_us) / step
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--task", default="reach_site_features")
+    parser.add_argument("--sizes", default="4,8")
+    parser.add_argument("--steps", type=int, default=50)
+    parser.add_argument("--model-cores", type=int, default=16)
+    args = parser.parse_args()
+    cores = os.cpu_count() or 1
+    sizes = [int(size) for size in args.sizes.split(",")]
+    print(
+        f"task {args.task}, {cores} cores, 1-minute load average {os.getloadavg()[0]:.2f}; "
+        f"{args.steps} vector steps"
+    )
+    loop_us = loop_step_us(args.task, args.steps)
+    print(
+        "\n| N | threads | wake-up us (min) | barrier wait us | straggler us | vector step us "
+        "| threaded/loop | raw lock-step ceiling |"
+    )
+    print("|---|---|---|---|---|---|---|---|")
+    hand_offs = []
+    for size in sizes:
+        row = profile_steps(args.task, size, args.steps)
+        ceiling = raw_ceiling(args.task, size, args.steps)
+        speedup = size * loop_us / row["step"]
+        hand_offs.append(row["wake_min"])
+        print(
+            f"| {size} | {row['threads']} | {row['wake']:.0f} ({row['wake_min']:.0f}) | "
+            f"{row['wait']:.0f} | "
+            f"{row['straggler']:.0f} | {row['step']:.0f} | {speedup:.2f}x | {ceiling:.2f}x |"
+        )
+    total, mujoco_us, releases = split_step(args.task, args.steps)
+    python_us = total - mujoco_us
+    print(
+        f"\nloop: {loop_us:.0f} us per step; CPU per sub-env step {total:.0f} us: MuJoCo "
+        f"{mujoco_us:.0f}, Python (GIL held) {python_us:.0f} ({python_us / total:.0%}); "
+        f"GIL releases (calls into mujoco or ctypes) per sub-env step: {releases:.0f}"
+    )
+    speedups = switch_interval_speedups(args.task, max(sizes), args.steps)
+    print(
+        f"threaded/loop at N = {max(sizes)} by GIL switch interval: "
+        + ", ".join(f"{interval * 1e3:g} ms {s:.2f}x" for interval, s in speedups.items())
+    )
+    hand_off = min(hand_offs) if hand_offs else 0.0
+    c = args.model_cores
+    print(
+        f"\nmodel of {c} cores (M {mujoco_us:.0f} us, P {python_us:.0f} us, "
+        f"hand-off {hand_off:.0f} us, the least wake-up seen):"
+    )
+    print("| N | modelled threaded/loop | bound by |")
+    print("|---|---|---|")
+    for size in (1, 4, 8, 16, 32, 64):
+        s = modelled_speedup(size, c, mujoco_us, python_us, hand_off)
+        serial = size * python_us >= math.ceil(size / c) * (mujoco_us + python_us)
+        print(f"| {size} | {s:.2f}x | {'Python (GIL)' if serial else 'cores'} |")
+    print(f"\n1-minute load average at the end: {os.getloadavg()[0]:.2f}")
+
+
+if __name__ == "__main__":
+    main()
