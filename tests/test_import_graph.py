@@ -28,9 +28,6 @@ _ELEMENT_RING = frozenset(
         "mjcf.xml_writer",
     }
 )
-# Known, being removed: the row helpers shared by the two gym vector envs (issue 44, item 3,
-# on another branch). Drop this entry once that branch is merged.
-_KNOWN_CYCLES = [frozenset({"composer.gym.env", "composer.gym.sub_env_vector"})]
 
 
 def _module_files(root: Path, packages) -> dict[str, Path]:
@@ -141,8 +138,7 @@ def test_no_module_imports_a_package_above_its_own(graph):
 
 
 def test_the_only_import_cycles_are_the_element_ring(graph):
-    found = [cycle for cycle in cycles(graph) if cycle not in _KNOWN_CYCLES]
-    assert found == [_ELEMENT_RING]
+    assert cycles(graph) == [_ELEMENT_RING]
 
 
 def test_every_cycle_of_the_element_ring_goes_through_the_element_module(graph):

@@ -51,7 +51,7 @@ DM_CONTROL_VERSION = "1.0.50"
 # What dm_control's tests import beyond its own requirements; protobuf below 7, whose
 # FieldDescriptor no longer has the `label` that dm_control 1.0.50's mocap loader reads (its
 # tracking tests fail with protobuf 7 whatever serves composer).
-TEST_EXTRAS = ["mock", "pytest", "pillow", "h5py", "protobuf<7"]
+TEST_EXTRAS = ["mock", "pytest", "pytest-xdist", "pillow", "h5py", "protobuf<7"]
 
 #: dm_control packages whose test files are run: the three this project serves, and the
 #: packages built on them (entities of the manipulation suite, the Control Suite, its RL
@@ -294,6 +294,11 @@ def run_tests(python: Path, tests: Path) -> tuple[list[FileResult], list[str]]:
             "no:cacheprovider",
             "--import-mode=importlib",
             "--continue-on-collection-errors",
+            # On every core: a test file's tests stay together in one worker.
+            "-n",
+            str(os.cpu_count() or 1),
+            "--dist",
+            "loadfile",
             f"--junitxml={report}",
             "-o",
             "junit_family=xunit1",
