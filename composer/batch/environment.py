@@ -18,6 +18,7 @@ from composer.batch.observables import BatchObservables
 from composer.batch.physics import BatchPhysics, device_model_fields
 from composer.batch.state_slots import InitialStateStats, StateSlots
 from composer.batch.task import BatchTask, for_task, has_array_initializer
+from composer.batch.time_limit import NO_LIMIT, control_step_limit
 from composer.hooks import EnvironmentHooks
 from composer.utils import argument_checks
 
@@ -25,9 +26,6 @@ __all__ = ["AUTORESET_MODES", "BatchEnvironment", "BatchTimeStep", "EpisodeEnds"
 
 #: The values of `BatchEnvironment(autoreset_mode=...)`, as Gymnasium names its modes.
 AUTORESET_MODES = ("next_step", "same_step")
-
-# A step count no episode reaches: the limit of an infinite time limit (int32 counters).
-_NO_LIMIT = 2**31 - 1
 
 _FIRST, _MID, _LAST = (
     int(t) for t in (dm_env.StepType.FIRST, dm_env.StepType.MID, dm_env.StepType.LAST)
@@ -99,22 +97,6 @@ def _random_states(num_envs: int, random_state, random_states) -> list[np.random
         random_state = np.random.RandomState(random_state)
     seeds = random_state.randint(2**31, size=num_envs)
     return [np.random.RandomState(seed) for seed in seeds]
-
-
-def _control_step_limit(time_limit: float, physics_timestep: float, n_sub_steps: int) -> int:
-    """The number of control steps after which C MuJoCo's float64 `time` reaches the limit.
-
-    The time is accumulated as MuJoCo does (one addition per physics step), so a world
-    ends at the same step as the CPU environment, whatever float32's `time` on the device.
-    """
-    if math.isinf(time_limit):
-        return _NO_LIMIT
-    time, steps = 0.0, 0
-    while time < time_limit:
-        for _ in range(n_sub_steps):
-            time += physics_timestep
-        steps += 1
-    return steps
 
 
 class BatchEnvironment:
@@ -267,7 +249,7 @@ class BatchEnvironment:
             strip_singleton_obs_buffer_dim,
             self._batch_task.observable_readers(self._physics),
         )
-        self._step_limit = _control_step_limit(
+        self._step_limit = control_step_limit(
             float(time_limit), cpu_task.physics_timestep, self._n_sub_steps
         )
         self._slots = None
@@ -376,7 +358,7 @@ class BatchEnvironment:
     @property
     def max_episode_steps(self) -> int | None:
         """The control steps after which the time limit ends an episode; None without one."""
-        return None if self._step_limit == _NO_LIMIT else self._step_limit
+        return None if self._step_limit == NO_LIMIT else self._step_limit
 
     @property
     def episode_steps(self) -> Any:
