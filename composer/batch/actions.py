@@ -2,9 +2,10 @@
 
 NumPy arrays, lists and other host values are checked with NumPy and copied to the device
 once. Warp, torch and JAX arrays stay where they are: their shape, dtype and device are
-checked from their metadata. Their values are checked for NaN and infinity by one kernel
-that counts them, whose one integer comes back to the host; on CUDA that read would
-synchronise every step, so there it runs only with `check_values=True`.
+checked from their metadata. Their values are checked for NaN, infinity and magnitudes
+beyond float32's range (infinite once cast to float32) by one kernel that counts them,
+whose one integer comes back to the host; on CUDA that read would synchronise every step,
+so there it runs only with `check_values=True`.
 """
 
 from typing import Any
@@ -15,6 +16,8 @@ from composer.batch import _warp, kernels
 from composer.batch.arrays import ArrayBridge, array_library
 
 __all__ = ["check_action"]
+
+_FLOAT32_MAX = float(np.finfo(np.float32).max)
 
 
 def check_action(
@@ -30,8 +33,8 @@ def check_action(
 
     Raises:
       ValueError: naming `action`, for a value that is not a float array of shape
-        `expected`, a device array on another device, or NaN or infinite entries (the
-        message lists the worlds that have them).
+        `expected`, a device array on another device, or NaN, infinite or (float64)
+        beyond float32's range entries (the message lists the worlds that have them).
     """
     library = array_library(action)
     if not library:
@@ -68,7 +71,7 @@ def check_action(
             device=arrays.device,
         )
         if count.numpy()[0]:
-            _raise_nonfinite(rows.numpy())
+            _raise_bad_values(rows.numpy())
     xp = arrays.xp
     return xp.astype(arrays.view(array, expected), xp.float32)
 
@@ -84,11 +87,17 @@ def _check_host_action(action, expected: tuple[int, ...]) -> np.ndarray:
         raise ValueError(
             f"action: expected shape {expected} (num_envs, *action_spec().shape), got {array.shape}"
         )
-    if not np.isfinite(array).all():
-        _raise_nonfinite(array)
+    if not (np.abs(array) <= _FLOAT32_MAX).all():
+        _raise_bad_values(array)
     return array
 
 
-def _raise_nonfinite(values: np.ndarray) -> None:
-    worlds = np.unique(np.nonzero(~np.isfinite(values))[0])
-    raise ValueError(f"action: NaN or infinity in the actions of worlds {worlds.tolist()}")
+def _raise_bad_values(values: np.ndarray) -> None:
+    nonfinite = np.unique(np.nonzero(~np.isfinite(values))[0])
+    if nonfinite.size:
+        raise ValueError(f"action: NaN or infinity in the actions of worlds {nonfinite.tolist()}")
+    worlds = np.unique(np.nonzero(np.abs(values) > _FLOAT32_MAX)[0])
+    raise ValueError(
+        f"action: values beyond float32's range (magnitude above {_FLOAT32_MAX:.7g}, which "
+        f"the device's float32 makes infinite) in the actions of worlds {worlds.tolist()}"
+    )

@@ -365,9 +365,9 @@ class BatchEnvironment:
         """The control steps each world's episode has taken, int32 (num_envs,), handed out
         as `array_type` (a copy).
 
-        Setting it (an integer array of shape (num_envs,), values >= 0) moves each world's
-        count, and so when its time limit ends it: rsl_rl starts training from random
-        episode lengths this way.
+        Setting it (an integer array of shape (num_envs,), values from 0 to 2**31 - 2, as
+        the device counts in int32) moves each world's count, and so when its time limit
+        ends it: rsl_rl starts training from random episode lengths this way.
         """
         return self.hand_out(self.xp.asarray(self._steps, copy=True))
 
@@ -379,8 +379,9 @@ class BatchEnvironment:
                 f"episode_steps: expected integers of shape ({self.num_envs},), got "
                 f"{values.dtype} of shape {values.shape}"
             )
-        if values.size and values.min() < 0:
-            raise ValueError(f"episode_steps: expected counts >= 0, got {values.min()}")
+        if values.size and not 0 <= values.min() <= values.max() < NO_LIMIT:
+            bad = values.min() if values.min() < 0 else values.max()
+            raise ValueError(f"episode_steps: expected counts from 0 to {NO_LIMIT - 1}, got {bad}")
         self._steps = self._arrays.asarray(values.astype(np.int32))
 
     def initial_state_stats(self) -> InitialStateStats | None:

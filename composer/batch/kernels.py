@@ -7,6 +7,8 @@ views of MuJoCo Warp's per-world arrays made by `rows`.
 from types import SimpleNamespace
 from typing import Any
 
+import numpy as np
+
 from composer.batch import _warp
 
 __all__ = ["kernels", "rows"]
@@ -43,6 +45,8 @@ def rows(array, dtype, nrows: int):
 
 
 def _define(wp) -> SimpleNamespace:
+    float32_max = wp.constant(wp.float64(np.finfo(np.float32).max))
+
     @wp.kernel(module="unique")
     def save_columns(
         columns: wp.array(dtype=wp.int32),
@@ -78,9 +82,11 @@ def _define(wp) -> SimpleNamespace:
 
     @wp.kernel(module="unique")
     def count_nonfinite(values: wp.array2d(dtype=Any), count: wp.array(dtype=wp.int32)):
-        """Adds the number of NaN or infinite entries of `values` to count[0]."""
+        """Adds the number of entries of `values` that are NaN, infinite, or beyond float32's
+        range (which becomes infinity in float32) to count[0]."""
         i, j = wp.tid()
-        if not wp.isfinite(values[i, j]):
+        value = wp.float64(values[i, j])
+        if not wp.isfinite(value) or wp.abs(value) > float32_max:
             wp.atomic_add(count, 0, 1)
 
     @wp.kernel(module="unique")

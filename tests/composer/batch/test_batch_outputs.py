@@ -121,6 +121,14 @@ def test_device_action_with_nan_names_the_world_and_steps_nothing(warp_env):
     np.testing.assert_array_equal(warp_env.physics.data.qpos, qpos)
 
 
+def test_float64_device_action_beyond_float32_names_the_world(warp_env):
+    warp_env.step(_zeros(warp_env))
+    action = _zeros(warp_env).astype(np.float64)
+    action[1, 3] = 1e39
+    with pytest.raises(ValueError, match=r"beyond float32's range .* worlds \[1\]"):
+        warp_env.step(wp.array(action, dtype=wp.float64, device="cpu"))
+
+
 def test_device_action_of_the_wrong_shape_is_refused(warp_env):
     with pytest.raises(ValueError, match=r"action: expected shape \(3, 9\).*got \(3, 5\)"):
         warp_env.step(wp.zeros((NUM_ENVS, 5), dtype=wp.float32, device="cpu"))

@@ -85,6 +85,25 @@ def test_nan_action_names_the_world(env):
         env.step(action)
 
 
+def test_finite_action_beyond_float32_names_the_world(env):
+    qpos = env.physics.data.qpos.copy()
+    action = np.zeros((NUM_ENVS, 9))
+    action[2, 0] = -1e39  # finite in float64, infinite in the device's float32
+    with pytest.raises(ValueError, match=r"beyond float32's range .* worlds \[2\]"):
+        env.step(action)
+    np.testing.assert_array_equal(env.physics.data.qpos, qpos)
+
+
+def test_episode_steps_beyond_int32_are_refused_by_name(env):
+    steps = np.zeros(NUM_ENVS, np.int64)
+    steps[1] = 2**31  # would wrap to a negative int32 count
+    with pytest.raises(ValueError, match=r"episode_steps: expected counts from 0 to 2147483646"):
+        env.episode_steps = steps
+    steps[1] = -1
+    with pytest.raises(ValueError, match=r"episode_steps: .*got -1"):
+        env.episode_steps = steps
+
+
 def test_observations_have_the_cpu_shapes_behind_the_world_axis(env):
     cpu = composer.Environment(Reach(observation_settings.FEATURES), random_state=0)
     expected = cpu.reset().observation
