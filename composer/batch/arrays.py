@@ -11,8 +11,10 @@ their memory, in one array namespace of the Python array API standard (`array_ap
 | CUDA       | any                 | torch CUDA tensors (`warp.to_torch`)                |
 
 `namespace="torch"` picks torch on the CPU device too (the code path CUDA runs). On CUDA,
-the calling thread's current torch stream becomes Warp's stream of the device, so that
-torch's and Warp's work on the same memory runs in order.
+torch runs on Warp's stream of the device, so that torch's and Warp's work on the same
+memory runs in order. torch's current stream is per thread: the bridge sets it for the
+thread that builds the batch, and `reset` and `step` set it again for the thread that calls
+them (another thread may step the batch).
 
 What `reset` and `step` hand out is converted from that namespace without a copy, except
 for `array_type="numpy"` on CUDA, which copies to the host:
@@ -86,6 +88,7 @@ class ArrayBridge:
 
         self._wp = warp
         self.device = device
+        self._torch_stream = None
         self.array_type = check_array_type(array_type)
         if namespace not in (None, "numpy", "torch") or (namespace == "numpy" and device.is_cuda):
             raise ValueError(
@@ -104,12 +107,20 @@ class ArrayBridge:
                 # torch's work on the batch's arrays and Warp's must be ordered: torch runs on
                 # Warp's stream of the device (Warp cannot record CUDA graphs on torch's
                 # legacy default stream).
-                self._torch.cuda.set_stream(warp.stream_to_torch(warp.get_stream(device)))
+                self._torch_stream = warp.stream_to_torch(warp.get_stream(device))
+                self.use_stream()
         else:
             self.xp = array_api_compat.array_namespace(np.zeros(0))
             self.xp_device = "cpu"
         if array_type == "jax":
             _import("jax", "array_type='jax'")
+
+    def use_stream(self) -> None:
+        """Makes Warp's stream of the device the calling thread's current torch stream (on
+        CUDA; nothing elsewhere). torch keeps one current stream per thread."""
+        stream = self._torch_stream
+        if stream is not None and self._torch.cuda.current_stream(stream.device) != stream:
+            self._torch.cuda.set_stream(stream)
 
     # Warp -> namespace.
 

@@ -431,6 +431,7 @@ class BatchEnvironment:
         Returns:
           A `BatchTimeStep` with every step type FIRST, rewards 0 and discounts 1.
         """
+        self._arrays.use_stream()
         if self._slots is not None:
             self._slots.refill(wait=True)
         xp = self.xp
@@ -490,6 +491,7 @@ class BatchEnvironment:
           ValueError: for an action of the wrong shape or with NaN or infinity; nothing is
             stepped.
         """
+        self._arrays.use_stream()
         clock = self._clock
         clock.start()
         checked = actions.check_action(

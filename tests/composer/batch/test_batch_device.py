@@ -173,6 +173,28 @@ def test_without_a_gpu_the_default_device_is_the_cpu_with_a_warning():
     assert env.physics.device.is_cpu
 
 
+def test_a_step_from_another_thread_runs_torch_on_warps_stream():
+    if not wp.is_cuda_available():
+        pytest.skip("torch's per-thread stream matters on CUDA only; Warp sees no GPU")
+    import threading
+
+    import torch
+
+    env = manipulation_batch.load(NAME, NUM_ENVS, seed=0)
+    env.reset()
+    streams = []
+
+    def step():
+        env.step(np.zeros((NUM_ENVS, *env.action_spec().shape)))
+        streams.append(torch.cuda.current_stream())
+
+    thread = threading.Thread(target=step)
+    thread.start()
+    thread.join()
+    assert streams == [wp.stream_to_torch(wp.get_stream(env.physics.device))]
+    env.close()
+
+
 def test_unknown_autoreset_mode_is_refused_by_name():
     with pytest.raises(ValueError, match=r"autoreset_mode: expected one of .*got 'later'"):
         BatchEnvironment(Reach(observation_settings.FEATURES), 2, autoreset_mode="later")
