@@ -116,6 +116,7 @@ class StateSlots:
         self._shared_written: dict[str, np.ndarray] | None = None
         self._warned = False
         self._steps = 0
+        self._control_steps = 0  # since the last restart, for the warning's rates
         self._clear_bookkeeping()
         self._stats = InitialStateStats(0, 0, 0, 0.0)
 
@@ -146,6 +147,7 @@ class StateSlots:
         self._counters.zero_()
         self._uploaded_on_device.zero_()
         self._clear_bookkeeping()
+        self._control_steps = 0
         self._stats = InitialStateStats(0, 0, 0, 0.0)
 
     def _drop_pending(self) -> None:
@@ -194,6 +196,7 @@ class StateSlots:
         """Counts a control step: uploads finished states, and refills every
         `refill_interval` steps."""
         self._steps += 1
+        self._control_steps += 1
         if self._steps >= self.refill_interval:
             self.refill(wait=False)
         elif self._pending is not None and self._pending.done():
@@ -211,7 +214,7 @@ class StateSlots:
         """
         self._steps = 0
         started, reused = self._counters.numpy().astype(np.int64)
-        self._warn_about_reuse(int(reused.sum()))
+        self._warn_about_reuse(int(reused.sum()), int(started.sum()))
         if self._pending is not None:
             lacking = bool(np.any(self._uploaded <= started))
             if not (wait or lacking or self._pending.done()):
@@ -230,14 +233,20 @@ class StateSlots:
             if wait and first_fill:
                 self._collect()
 
-    def _warn_about_reuse(self, total: int) -> None:
+    def _warn_about_reuse(self, total: int, started: int) -> None:
         if total and not self._warned:
             self._warned = True
+            n = self._physics.num_envs
+            length = self._control_steps * n / max(started, 1)
             warnings.warn(
                 f"{total} episodes started from an initial state their world had used before: "
-                "the worlds reset faster than the states were refilled; give more "
-                "slots_per_world, a smaller refill_interval or more state_workers "
-                "(BatchEnvironment.initial_state_stats() counts them)",
+                f"the worlds reset faster than the states were refilled. {n} worlds whose "
+                f"episodes last {length:.1f} control steps on average need {n / length:.1f} "
+                "initial states per control step (num_envs / episode control steps); one "
+                "producer makes a few hundred to a thousand per second (docs/concepts/batch.md "
+                "has measurements). Give more state_workers (with state_processes=True they "
+                "scale with the host's cores), more slots_per_world or a smaller "
+                "refill_interval (BatchEnvironment.initial_state_stats() counts reuses)",
                 RuntimeWarning,
                 stacklevel=5,
             )
