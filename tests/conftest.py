@@ -18,11 +18,6 @@ SCREEN = (1024, 768)
 
 
 def pytest_collection_modifyitems(config, items):
-    # Under pytest-xdist with `--dist loadgroup` (.ci/run), one worker runs every MuJoCo Warp
-    # test, so Warp's kernels compile once, not once per worker; the other tests spread.
-    for item in items:
-        if "warp" in item.keywords:
-            item.add_marker(pytest.mark.xdist_group("warp"))
     # The checked-in patch table is proven on one MuJoCo release; on another it does not
     # apply (a proof cached by `python -m manipulation.patch_proof` may), so what it promises is
     # not there to check.
