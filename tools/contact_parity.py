@@ -198,7 +198,8 @@ def _state_before(model, start, physics_step: int) -> np.ndarray:
     return _get(model, data)
 
 
-def _contact_table(model, state) -> None:
+def _forwarded_on_both(model, state):
+    """C MuJoCo's data and MuJoCo Warp's, both set to `state` and forwarded."""
     data = mujoco.MjData(model)
     data.ctrl[:] = CTRL
     _set(model, data, state)
@@ -206,6 +207,11 @@ def _contact_table(model, state) -> None:
     warp = _Warp(model, data)
     warp.set_state(model, state)
     warp.forward()
+    return data, warp
+
+
+def _contact_table(model, state) -> None:
+    data, warp = _forwarded_on_both(model, state)
     names = {i: model.geom(i).name for i in range(model.ngeom)}
     print("\n2. Contacts at the impact step, same (float32) state: C MuJoCo vs MuJoCo Warp")
     print("| pair | count C / Warp | dist C | dist Warp | max pos diff (m) | max normal diff |")
@@ -274,13 +280,7 @@ def _rim_depth(center, axis, radius, half_height, dtype, stable: bool) -> float:
 
 
 def _formula_table(model, state) -> None:
-    data = mujoco.MjData(model)
-    data.ctrl[:] = CTRL
-    _set(model, data, state)
-    mujoco.mj_forward(model, data)
-    warp = _Warp(model, data)
-    warp.set_state(model, state)
-    warp.forward()
+    data, warp = _forwarded_on_both(model, state)
     puck = model.geom("puck").id
     radius, half_height = model.geom_size[puck][:2]
     c_center, c_axis = data.geom_xpos[puck], data.geom_xmat[puck].reshape(3, 3)[:, 2]
