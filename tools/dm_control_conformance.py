@@ -1,11 +1,11 @@
 """Runs dm_control 1.0.50's own tests, suite, manipulation and locomotion tasks here.
 
 Usage: `python -m tools.dm_control_conformance [--floor 0.99] [--tasks-only | --tests-only |
---moma-only] [--packages composer mjcf ...]`
+--moma-only | --install-only] [--packages composer mjcf ...]`
 
 Builds a scratch venv under `.cache/dm_control_conformance` with this project and
-`dm-control==1.0.50` installed from PyPI, copies the test files of dm_control's
-`composer`, `mjcf`, `entities`, `suite`, `mujoco`, `rl` and `locomotion`
+`dm-control==1.0.50` installed from PyPI (`--install-only` stops there), copies the test
+files of dm_control's `composer`, `mjcf`, `entities`, `suite`, `mujoco`, `rl` and `locomotion`
 packages out of that install (nothing of dm_control is kept in the repository), and runs
 them with `dm_control.composer` / `dm_control.mjcf` / `dm_control.mujoco` served by
 this project through `composer.dm_control_compat`. Exception types are checked, message
@@ -488,8 +488,11 @@ def main() -> int:
     parser.add_argument(
         "--packages", nargs="+", choices=TESTED_PACKAGES, default=list(TESTED_PACKAGES)
     )
+    parser.add_argument("--install-only", action="store_true", help="build the venv and exit")
     args = parser.parse_args()
     python = ensure_conformance_venv()
+    if args.install_only:
+        return 0
     if args.moma_only:
         return moma_conformance.run(python, CACHE)
     status = 0

@@ -1,12 +1,15 @@
 """Checks that a seed gives dm_control's episode: the project against dm_control 1.0.50.
 
 Usage: `python -m tools.dm_control_seeds [--seeds 5] [--steps 10] [--only ENV,...]
-[--mujoco4]`
+[--mujoco4] [--install-only]`
 
-Runs `tools/seed_episode_runner.py` in two scratch venvs under `.cache/dm_control_seeds`,
-both with dm_control 1.0.50 on mujoco 3.17: `reference` runs dm_control as it is, and
+Runs `tools/seed_episode_runner.py` twice in one scratch venv under `.cache/dm_control_seeds`,
+with dm_control 1.0.50 on mujoco 3.17 and this project installed beside it:
+`reference` runs dm_control as it is (the project is installed there but not imported), and
 `project` runs the same environments through this project's redirect (dm_control's
 manipulation suite and locomotion examples on this project's composer, mjcf and engine).
+`--install-only` builds that venv (and, with `--mujoco4`, the conformance harness's) and
+exits: CI builds it in the background while other checks run.
 For every environment and seed it compares:
 
 - the draws from the environment's random state, in order (method and generator state
@@ -200,19 +203,21 @@ def main() -> int:
         action="store_true",
         help="also report the project's differences on mujoco 4 (never fails)",
     )
+    parser.add_argument(
+        "--install-only", action="store_true", help="build the scratch venv(s) and exit"
+    )
     args = parser.parse_args()
     CACHE.mkdir(parents=True, exist_ok=True)
-    reference_python = scratch_venv.ensure_venv(
-        CACHE / "reference", [DM_CONTROL, MUJOCO], project=False
-    )
-    project_python = scratch_venv.ensure_venv(CACHE / "project", [DM_CONTROL, MUJOCO])
+    python = scratch_venv.ensure_venv(CACHE / "venv", [DM_CONTROL, MUJOCO])
+    newest_python = dm_control_conformance.ensure_conformance_venv() if args.mujoco4 else None
+    if args.install_only:
+        return 0
     # The sides run at the same time, each in a process of its own.
     sides = [
-        start_side(reference_python, "reference", args.seeds, args.steps, args.only),
-        start_side(project_python, "project", args.seeds, args.steps, args.only),
+        start_side(python, "reference", args.seeds, args.steps, args.only),
+        start_side(python, "project", args.seeds, args.steps, args.only),
     ]
-    if args.mujoco4:
-        newest_python = dm_control_conformance.ensure_conformance_venv()
+    if newest_python is not None:
         sides.append(start_side(newest_python, "project", args.seeds, args.steps, args.only))
     reference, project, *newest = [finish_side(*side) for side in sides]
     rows = [compare(name, args.seeds, reference, project) for name in _names(reference)]

@@ -1,6 +1,7 @@
 """Tests every supported MuJoCo minor release; prints release -> passed/failed/skipped.
 
-Usage: `python -m tools.mujoco_versions [--releases 3.3 4.0] [--strict] [-- PYTEST_ARGS]`
+Usage: `python -m tools.mujoco_versions [--releases 3.3 4.0] [--strict] [--install-only]
+[-- PYTEST_ARGS]`
 
 Builds one venv per release under `.cache/mujoco_versions/<version>` (kept between runs;
 `--venvs` puts them elsewhere), installs this project with its `[test]` extra and that
@@ -8,14 +9,15 @@ Builds one venv per release under `.cache/mujoco_versions/<version>` (kept betwe
 (`python -m manipulation.patch_proof`: on the release of the checked-in table it checks the table,
 on any other it caches its proof, in `xdg_cache/` beside the venvs), and runs `pytest` in
 each with `MUJOCO_GL=egl` and that proof; each run's full output goes to
-`logs/<version>.txt` beside the venvs. The releases are the newest patch of every
-minor release that pip offers from the project's floor (`mujoco_physics.version.MINIMUM_VERSION`)
-up, the floor version itself, and the newest release below the floor, where importing the
-project must fail with the ImportError that names both versions. `--releases` picks some:
-`floor`, `newest`, `below-floor`, a minor (`3.3`, its newest patch) or an exact
-version (`3.3.0`). With `--strict` the exit status is 1 when a release has a failing test
-or its install or test run breaks. `--skip-installed` leaves out the release that the running
-Python already has (CI's main run proved and tested it), saying so.
+`logs/<version>.txt` beside the venvs (`--install-only` builds the venvs and exits). The
+releases are the newest patch of every minor release that pip offers from the project's
+floor (`mujoco_physics.version.MINIMUM_VERSION`) up, the floor version itself, and the
+newest release below the floor, where importing the project must fail with the ImportError
+that names both versions. `--releases` picks some: `floor`, `newest`, `below-floor`, a
+minor (`3.3`, its newest patch) or an exact version (`3.3.0`). With `--strict` the exit
+status is 1 when a release has a failing test or its install or test run breaks.
+`--skip-installed` leaves out the release that the running Python already has (CI's main
+run proved and tested it), saying so.
 """
 
 from __future__ import annotations
@@ -196,6 +198,20 @@ def _install(venv: Path, release: Release, log) -> str:
     return ""
 
 
+def install_only(releases: list[Release], venvs: Path) -> int:
+    """Builds each release's venv in `venvs` (logs in `venvs/logs/`); returns 1 when one
+    failed, naming it and its log."""
+    status = 0
+    for release in releases:
+        log_path = venvs / "logs" / f"{release.version}-install.txt"
+        log_path.parent.mkdir(parents=True, exist_ok=True)
+        with open(log_path, "w") as log:
+            problem = _install(venvs / release.version, release, log)
+        print(f"mujoco {release.version}: {problem or 'installed'} (log: {log_path})")
+        status |= bool(problem)
+    return status
+
+
 def _summary_counts(output: str) -> dict[str, int] | None:
     """Counts from pytest's closing summary line, or None where there is none."""
     for line in reversed(output.splitlines()):
@@ -331,6 +347,11 @@ def main(argv: list[str] | None = None) -> int:
         action="store_true",
         help="leave out the release installed where this command runs (tested there already)",
     )
+    parser.add_argument(
+        "--install-only",
+        action="store_true",
+        help="build the releases' venvs and exit (CI builds them while other checks run)",
+    )
     parser.add_argument("pytest_args", nargs="*", help="extra arguments for pytest (after --)")
     args = parser.parse_args(argv)
     versions = available_versions()
@@ -345,6 +366,8 @@ def main(argv: list[str] | None = None) -> int:
         import mujoco
 
         releases = without_installed(releases, mujoco.__version__)
+    if args.install_only:
+        return install_only(releases, args.venvs.resolve())
     outcomes = []
     for release in releases:
         print(f"mujoco {release.version}: installing and testing ...", flush=True)
