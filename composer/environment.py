@@ -16,7 +16,7 @@ from composer.action_validation import action_validator
 from composer.hooks import HOOK_NAMES, EnvironmentHooks
 from composer.utils import argument_checks
 from composer.weak_physics import WeakPhysics
-from mjcf.compiled_model import CompiledModel, ModelUpdate
+from mjcf.patching.compiled_model import CompiledModel, ModelUpdate
 
 __all__ = [
     "HOOK_NAMES",

@@ -14,7 +14,7 @@ from collections.abc import Iterator
 
 import mjcf
 from manipulation.tasks import registry
-from mjcf import patch_proof
+from mjcf.patching import patch_proof
 
 
 def task_models() -> Iterator[tuple[str, mjcf.RootElement]]:

@@ -6,9 +6,9 @@ import re
 import mujoco
 
 from mjcf import binding as binding_module
-from mjcf import model_patch
 from mjcf.appearance import changes_are_forward_neutral, forward_neutral_fields
-from mjcf.geom_size_cache import SizePatchCache
+from mjcf.patching import model_patch
+from mjcf.patching.geom_size_cache import SizePatchCache
 from mujoco_physics import engine
 from mujoco_physics.engine import PhysicsError
 from mujoco_physics.field_layout import ModelLayout

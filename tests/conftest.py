@@ -23,7 +23,7 @@ def pytest_collection_modifyitems(config, items):
     # not there to check.
     import mujoco
 
-    from mjcf import patchable_attributes
+    from mjcf.patching import patchable_attributes
 
     if mujoco.__version__ == patchable_attributes.MUJOCO_VERSION:
         return
@@ -64,7 +64,7 @@ def display():
 def compiles(monkeypatch) -> list:
     """The MJCF roots compiled from now on by `mjcf.compiled_model.CompiledModel` (and so
     by `composer.Environment`), in order."""
-    from mjcf import compiled_model
+    from mjcf.patching import compiled_model
 
     calls = []
     original = compiled_model.compile_mjcf_model

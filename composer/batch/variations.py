@@ -43,7 +43,8 @@ import numpy as np
 
 import mjcf
 from composer.hooks import EnvironmentHooks
-from mjcf import binding, patch_table, patchable_attributes
+from mjcf import binding
+from mjcf.patching import patch_table, patchable_attributes
 from mujoco_physics import field_layout
 
 __all__ = ["EpisodeModel", "PerWorldFields", "measure", "model_arrays", "per_world_fields"]

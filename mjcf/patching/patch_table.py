@@ -26,7 +26,7 @@ from typing import NamedTuple
 
 import mujoco
 
-from mjcf import patchable_attributes
+from mjcf.patching import patchable_attributes
 
 __all__ = ["PROOF_COMMAND", "ProvenTable", "cache_path", "current", "write_cache"]
 

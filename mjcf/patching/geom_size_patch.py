@@ -36,7 +36,7 @@ import numpy as np
 
 from mjcf import binding, traversal_utils
 from mjcf.element import Element
-from mjcf.geom_body_copies import (
+from mjcf.patching.geom_body_copies import (
     BodyCopies,
     CompiledBody,
     InertiaSettings,
@@ -44,7 +44,7 @@ from mjcf.geom_body_copies import (
     is_true,
     row_slices,
 )
-from mjcf.geom_size_cache import SizePatchCache, SpringdamperScan
+from mjcf.patching.geom_size_cache import SizePatchCache, SpringdamperScan
 
 __all__ = ["FieldWrite", "size_writes"]
 

@@ -4,7 +4,7 @@ import mujoco
 import numpy as np
 import pytest
 
-from mujoco_physics.model_snapshot import ModelSnapshot, snapshots_supported
+from mjcf.patching.model_snapshot import ModelSnapshot, snapshots_supported
 
 _XML = """
 <mujoco>

@@ -4,7 +4,7 @@ have no setter (mujoco before 3.16)."""
 import mujoco
 import numpy as np
 
-from mujoco_physics.model_snapshot import _copy_struct
+from mjcf.patching.model_snapshot import _copy_struct
 
 _SOURCE = """
 <mujoco>

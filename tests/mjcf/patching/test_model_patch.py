@@ -11,8 +11,8 @@ import numpy as np
 import pytest
 
 import mjcf
-from mjcf import model_patch, patchable_attributes
-from mujoco_physics.model_snapshot import ModelSnapshot
+from mjcf.patching import model_patch, patchable_attributes
+from mjcf.patching.model_snapshot import ModelSnapshot
 
 _SCENE = """
 <mujoco model="scene">

@@ -41,15 +41,9 @@ import mujoco
 import numpy as np
 
 import mjcf
-from mjcf import (
-    attribute_types,
-    model_patch,
-    patch_table,
-    patchable_attributes,
-    schema,
-    traversal_utils,
-)
+from mjcf import attribute_types, schema, traversal_utils
 from mjcf.element import Element
+from mjcf.patching import model_patch, patch_table, patchable_attributes
 from mjcf.physics import compile_mjcf_model
 from mujoco_physics.field_layout import DATA_FIELDS, FAMILIES, MODEL, MODEL_FIELDS
 
@@ -66,7 +60,7 @@ _SCENE_FOLDER = "patch_proof_scenes"
 
 def _scenes() -> dict[str, str]:
     """The proof's own scenes, shipped with the package: file name -> MJCF text."""
-    folder = importlib.resources.files("mjcf") / _SCENE_FOLDER
+    folder = importlib.resources.files("mjcf.patching") / _SCENE_FOLDER
     files = sorted(
         (entry for entry in folder.iterdir() if entry.name.endswith(".xml")),
         key=lambda entry: entry.name,

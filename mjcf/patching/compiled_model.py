@@ -10,8 +10,8 @@ from __future__ import annotations
 import contextlib
 import enum
 
+from mjcf.patching.model_snapshot import ModelSnapshot, snapshots_supported
 from mjcf.physics import Physics, compile_mjcf_model
-from mujoco_physics.model_snapshot import ModelSnapshot, snapshots_supported
 from mujoco_physics.reset_state import ResetState
 
 __all__ = ["CompiledModel", "ModelUpdate"]

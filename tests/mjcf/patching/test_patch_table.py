@@ -7,7 +7,7 @@ import mujoco
 import pytest
 
 import mjcf
-from mjcf import model_patch, patch_table, patchable_attributes
+from mjcf.patching import model_patch, patch_table, patchable_attributes
 
 _SCENE = """
 <mujoco>

@@ -5,8 +5,8 @@ import numpy as np
 import pytest
 
 import mjcf
-from mjcf import compiled_model
-from mjcf.compiled_model import CompiledModel, ModelUpdate
+from mjcf.patching import compiled_model
+from mjcf.patching.compiled_model import CompiledModel, ModelUpdate
 
 _SCENE = """
 <mujoco>

@@ -38,16 +38,10 @@ from __future__ import annotations
 import mujoco
 import numpy as np
 
-from mjcf import (
-    attribute_types,
-    binding,
-    geom_size_patch,
-    model_statistics,
-    patch_table,
-    traversal_utils,
-)
+from mjcf import attribute_types, binding, traversal_utils
 from mjcf.element import Element
-from mjcf.geom_size_cache import SizePatchCache
+from mjcf.patching import geom_size_patch, model_statistics, patch_table
+from mjcf.patching.geom_size_cache import SizePatchCache
 from mujoco_physics.field_layout import MODEL
 
 __all__ = ["patch_supported", "patch_model"]

@@ -1,0 +1,1 @@
+"""Model patching: keeping a compiled model equal to a fresh compile without compiling."""
