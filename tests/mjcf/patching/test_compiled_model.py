@@ -1,4 +1,5 @@
-"""mjcf.compiled_model: each update outcome where its contract names it, and reset reuse."""
+"""mjcf.patching.compiled_model: each update outcome where its contract names it, and reset
+reuse."""
 
 import mujoco
 import numpy as np

@@ -1,4 +1,4 @@
-"""mujoco_physics.model_snapshot: restoring a compiled model's parameters in place."""
+"""mjcf.patching.model_snapshot: restoring a compiled model's parameters in place."""
 
 import mujoco
 import numpy as np

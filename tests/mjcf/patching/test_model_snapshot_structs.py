@@ -1,4 +1,4 @@
-"""mujoco_physics.model_snapshot: the field-by-field struct copy used where MjModel's structs
+"""mjcf.patching.model_snapshot: the field-by-field struct copy used where MjModel's structs
 have no setter (mujoco before 3.16)."""
 
 import mujoco

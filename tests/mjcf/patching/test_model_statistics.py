@@ -1,4 +1,4 @@
-"""mjcf.model_statistics: the statistics equal those MuJoCo's compiler computes."""
+"""mjcf.patching.model_statistics: the statistics equal those MuJoCo's compiler computes."""
 
 import mujoco
 import numpy as np

@@ -1,5 +1,5 @@
-"""mjcf.patch_proof proves value-only attributes and refuses those the compiler derives;
-manipulation.patch_proof runs it on the task suite's models."""
+"""mjcf.patching.patch_proof proves value-only attributes and refuses those the compiler
+derives; manipulation.patch_proof runs it on the task suite's models."""
 
 import copy
 import itertools
