@@ -6,7 +6,7 @@ eight motors) on a floor with a button, a static box carrying a touch sensor. Th
 `rgba` (pressed or released) every sub-step. Observables: the touch reading with
 `buffer_size=20` and a mean aggregator plus an additive-noise corruptor, and the leg joint
 angles with a multiplicative-noise corruptor. An `MJCFVariator` recolours the torso every
-episode (a change that `mjcf.model_patch` writes into the compiled model instead of
+episode (a change that `mjcf.patching.model_patch` writes into the compiled model instead of
 recompiling it) and a `PhysicsVariator` scales the floor's friction every episode. 20
 physics steps per control step.
 

@@ -16,7 +16,7 @@ from composer.action_validation import action_validator
 from composer.hooks import HOOK_NAMES, EnvironmentHooks
 from composer.utils import argument_checks
 from composer.weak_physics import WeakPhysics
-from mjcf.compiled_model import CompiledModel, ModelUpdate
+from mjcf.patching.compiled_model import CompiledModel, ModelUpdate
 
 __all__ = [
     "HOOK_NAMES",
@@ -93,10 +93,10 @@ class Environment(dm_env.Environment):
         otherwise the compiled model's parameters are restored from a copy taken
         right after compiling (undoing any writes through `physics.bind`), which is
         indistinguishable and much faster. When only attribute values proven patchable
-        changed (colours, frictions, gains, ...; `mjcf.model_patch`), their compiled
-        fields are written into the model instead of compiling. A recompile that changed
-        only parameter values loads them into the current model, so the Physics and its
-        bindings carry over; one that changed the model's structure gives a new Physics.
+        changed (colours, frictions, gains, ...; `mjcf.patching.model_patch`), their
+        compiled fields are written into the model instead of compiling. A recompile that
+        changed only parameter values loads them into the current model, so the Physics and
+        its bindings carry over; one that changed the model's structure gives a new Physics.
         If False, this happens only before the first episode (so `after_compile` hooks
         added after construction still run once), and changes made to the model during an
         episode persist.

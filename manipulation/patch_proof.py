@@ -1,10 +1,10 @@
-"""The patch proof of `mjcf.patch_proof` on the manipulation suite's models.
+"""The patch proof of `mjcf.patching.patch_proof` on the manipulation suite's models.
 
 Usage: `python -m manipulation.patch_proof [--write] [--extra-models DIR]` (about half a
 minute): proves which MJCF attributes a reset may patch in place on the 25 tasks' models
 (each distinct model once) and the proof's own scenes; on the release of the checked-in
-table `mjcf/patchable_attributes.py` it checks the table, on any other it caches its proof.
-`mjcf.patch_proof` says what is proven and how.
+table `mjcf/patching/patchable_attributes.py` it checks the table, on any other it caches
+its proof. `mjcf.patching.patch_proof` says what is proven and how.
 """
 
 from __future__ import annotations
@@ -14,7 +14,7 @@ from collections.abc import Iterator
 
 import mjcf
 from manipulation.tasks import registry
-from mjcf import patch_proof
+from mjcf.patching import patch_proof
 
 
 def task_models() -> Iterator[tuple[str, mjcf.RootElement]]:

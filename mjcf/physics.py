@@ -6,9 +6,9 @@ import re
 import mujoco
 
 from mjcf import binding as binding_module
-from mjcf import model_patch
 from mjcf.appearance import changes_are_forward_neutral, forward_neutral_fields
-from mjcf.geom_size_cache import SizePatchCache
+from mjcf.patching import model_patch
+from mjcf.patching.geom_size_cache import SizePatchCache
 from mujoco_physics import engine
 from mujoco_physics.engine import PhysicsError
 from mujoco_physics.field_layout import ModelLayout
@@ -159,10 +159,10 @@ class Physics(engine.Physics):
         Returns:
           True when the model now equals a fresh compile of the changed MJCF model; its
           data is then to be reset, as after a compile. False, having changed nothing, when
-          a change is not one that `mjcf.model_patch` can write (then recompile).
+          a change is not one that `mjcf.patching.model_patch` can write (then recompile).
 
         What size patches look up in the compiled model is kept for the next call, until
-        this Physics loads another model (`mjcf.geom_size_cache`).
+        this Physics loads another model (`mjcf.patching.geom_size_cache`).
         """
         return model_patch.patch_model(self, changes, cache=self._size_patch_cache)
 

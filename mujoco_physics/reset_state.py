@@ -9,9 +9,9 @@ the same bytes as resetting again (tens to hundreds of µs: the forward).
 
 Whether the model is unchanged is for the owner to say: it calls `invalidate()` whenever
 the model may have changed in a field `mj_forward` reads since the last `reset`.
-`mjcf.compiled_model.CompiledModel` does, and its class docstring states when: its updates
-restore the model's parameters from a `ModelSnapshot`, so the model each reset starts from
-is known.
+`mjcf.patching.compiled_model.CompiledModel` does, and its class docstring states when: its
+updates restore the model's parameters from a `ModelSnapshot`, so the model each reset
+starts from is known.
 """
 
 from __future__ import annotations

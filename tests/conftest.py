@@ -23,12 +23,12 @@ def pytest_collection_modifyitems(config, items):
     # not there to check.
     import mujoco
 
-    from mjcf import patchable_attributes
+    from mjcf.patching import patchable_attributes
 
     if mujoco.__version__ == patchable_attributes.MUJOCO_VERSION:
         return
     skip = pytest.mark.skip(
-        reason=f"mjcf/patchable_attributes.py is proven on mujoco "
+        reason=f"mjcf/patching/patchable_attributes.py is proven on mujoco "
         f"{patchable_attributes.MUJOCO_VERSION}, not on the installed {mujoco.__version__}"
     )
     for item in items:
@@ -62,9 +62,9 @@ def display():
 
 @pytest.fixture
 def compiles(monkeypatch) -> list:
-    """The MJCF roots compiled from now on by `mjcf.compiled_model.CompiledModel` (and so
-    by `composer.Environment`), in order."""
-    from mjcf import compiled_model
+    """The MJCF roots compiled from now on by `mjcf.patching.compiled_model.CompiledModel`
+    (and so by `composer.Environment`), in order."""
+    from mjcf.patching import compiled_model
 
     calls = []
     original = compiled_model.compile_mjcf_model

@@ -60,7 +60,7 @@ class Outcome(NamedTuple):
     seconds: float
     problem: str  # empty when the run reached pytest's summary
     details: tuple[str, ...]  # pytest's FAILED/ERROR lines, or the log's tail on a problem
-    patched: int | None  # the pairs `mjcf.patch_proof` proved; None where it did not run
+    patched: int | None  # pairs `mjcf.patching.patch_proof` proved; None if it did not run
 
     @property
     def ok(self) -> bool:

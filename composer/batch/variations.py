@@ -2,17 +2,17 @@
 
 A CPU `composer.Environment` brings its model up to date at every reset: the
 `initialize_episode_mjcf` hooks (an `MJCFVariator`) change MJCF attributes, and the changes
-of attributes proven patchable (`mjcf.model_patch`, with the proof `mjcf.patch_table` finds
-for the installed MuJoCo, made by `python -m manipulation.patch_proof`) are written into the
-compiled model, followed by `mj_setConst` where the table marks the attribute; the
-`initialize_episode` hooks (a `PhysicsVariator`) then write model fields through
-`physics.bind`. A batch compiles once and does the same for each world: the initial-state
-producer that makes a world's episode runs both hooks on its host physics with that world's
-generator (`EpisodeModel` for the first), and the model fields they changed travel with the
-initial state as the world's rows of per-world model fields, written at its reset
-(`composer.batch.state_slots`). `mj_setConst` therefore runs on the producer, in float64 as
-on the CPU, for the episodes whose changes need it, and a reset touches no world but the
-ones it starts.
+of attributes proven patchable (`mjcf.patching.model_patch`, with the proof
+`mjcf.patching.patch_table` finds for the installed MuJoCo, made by
+`python -m manipulation.patch_proof`) are written into the compiled model, followed by
+`mj_setConst` where the table marks the attribute; the `initialize_episode` hooks (a
+`PhysicsVariator`) then write model fields through `physics.bind`. A batch compiles once and
+does the same for each world: the initial-state producer that makes a world's episode runs
+both hooks on its host physics with that world's generator (`EpisodeModel` for the first),
+and the model fields they changed travel with the initial state as the world's rows of
+per-world model fields, written at its reset (`composer.batch.state_slots`). `mj_setConst`
+therefore runs on the producer, in float64 as on the CPU, for the episodes whose changes
+need it, and a reset touches no world but the ones it starts.
 
 Which fields get a row per world is measured once, before the model goes on the device
 (`measure`): two probe episodes, with generators of their own, run the hooks on the host
@@ -43,7 +43,8 @@ import numpy as np
 
 import mjcf
 from composer.hooks import EnvironmentHooks
-from mjcf import binding, patch_table, patchable_attributes
+from mjcf import binding
+from mjcf.patching import patch_table, patchable_attributes
 from mujoco_physics import field_layout
 
 __all__ = ["EpisodeModel", "PerWorldFields", "measure", "model_arrays", "per_world_fields"]
@@ -171,7 +172,7 @@ class EpisodeModel:
             raise _refusal(
                 element,
                 attribute,
-                f"mjcf.model_patch cannot write these changes in place: {described}",
+                f"mjcf.patching.model_patch cannot write these changes in place: {described}",
             )
         self.changes = changes
 

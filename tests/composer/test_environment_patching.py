@@ -6,7 +6,7 @@ from composer_scene import ReachTask, assert_same_episodes, play_episodes
 
 import composer
 import mjcf
-from mjcf import compiled_model
+from mjcf.patching import compiled_model
 
 
 class VariedTask(ReachTask):

@@ -83,7 +83,8 @@ def test_the_patch_proof_runs_in_the_release_venv_and_its_count_is_read(tmp_path
 
 
 def test_a_failing_patch_proof_is_a_problem_of_the_release(tmp_path):
-    venv = _fake_venv(tmp_path, 'echo "mjcf/patchable_attributes.py is stale" >&2\nexit 1\n')
+    stale = 'echo "mjcf/patching/patchable_attributes.py is stale" >&2\nexit 1\n'
+    venv = _fake_venv(tmp_path, stale)
     log = tmp_path / "log.txt"
     patched, problem = mujoco_versions._prove_patch_table(venv, {"PATH": "/usr/bin:/bin"}, log)
     assert patched is None

@@ -24,7 +24,7 @@ from manipulation.props import Duplo2x4
 from manipulation.tasks import observation_settings
 from manipulation.tasks.lift import Lift
 from manipulation.tasks.reach import Reach
-from mjcf import patchable_attributes
+from mjcf.patching import patchable_attributes
 
 NAME = "lift_brick_randomised_features"
 SEEDS = (11, 12, 13)

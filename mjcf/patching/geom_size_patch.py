@@ -7,15 +7,15 @@ volume hierarchy (`bvh_*` over `body_bvhadr`/`body_bvhnum`) and, where a body's 
 comes from its geoms, its mass, inertia and inertial frame (`body_mass`, `body_inertia`,
 `body_ipos`, `body_iquat`). What follows from those (subtree masses, inverse weights, ...)
 is left to `mj_setConst`, which the patch table requires after a size write, and the
-model statistics to `mjcf.model_statistics`.
+model statistics to `mjcf.patching.model_statistics`.
 
 The derived values are not computed here but by MuJoCo's compiler, on `BodyCopies` of
-the changed bodies (`mjcf.geom_body_copies`). A copy is trusted only while it reproduces
-the compiled model: before its rows are used, the compiled model must hold the sizes and
-rows of the copy's last kept compile, or the copy, compiled with the compiled model's
-sizes, must give its rows bit for bit; a copy that does neither is built anew once, and if
-the new one does not either, the patch declines. That the result equals a recompile is
-proven by `mjcf/patch_proof.py`, like every pair of the patch table.
+the changed bodies (`mjcf.patching.geom_body_copies`). A copy is trusted only while it
+reproduces the compiled model: before its rows are used, the compiled model must hold the
+sizes and rows of the copy's last kept compile, or the copy, compiled with the compiled
+model's sizes, must give its rows bit for bit; a copy that does neither is built anew once,
+and if the new one does not either, the patch declines. That the result equals a recompile
+is proven by `mjcf/patching/patch_proof.py`, like every pair of the patch table.
 
 Declined (None; the caller recompiles): geoms other than sphere, capsule, ellipsoid,
 cylinder and box, in the changed geom's body too; geoms given by `fromto` (the compiled
@@ -36,7 +36,7 @@ import numpy as np
 
 from mjcf import binding, traversal_utils
 from mjcf.element import Element
-from mjcf.geom_body_copies import (
+from mjcf.patching.geom_body_copies import (
     BodyCopies,
     CompiledBody,
     InertiaSettings,
@@ -44,7 +44,7 @@ from mjcf.geom_body_copies import (
     is_true,
     row_slices,
 )
-from mjcf.geom_size_cache import SizePatchCache, SpringdamperScan
+from mjcf.patching.geom_size_cache import SizePatchCache, SpringdamperScan
 
 __all__ = ["FieldWrite", "size_writes"]
 

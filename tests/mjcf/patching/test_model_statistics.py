@@ -1,10 +1,10 @@
-"""mjcf.model_statistics: the statistics equal those MuJoCo's compiler computes."""
+"""mjcf.patching.model_statistics: the statistics equal those MuJoCo's compiler computes."""
 
 import mujoco
 import numpy as np
 import pytest
 
-from mjcf import model_statistics
+from mjcf.patching import model_statistics
 
 # The statistics are computed for the geom-size patch, in the compiler's order of the
 # MuJoCo release the patch table was proven on.

@@ -17,7 +17,7 @@ class SpringdamperScan(NamedTuple):
 
 @dataclasses.dataclass
 class SizePatchCache:
-    """What `mjcf.geom_size_patch` looked up in one compiled model, for its later patches.
+    """What `mjcf.patching.geom_size_patch` looked up in one compiled model, for later patches.
 
     Valid for the structure of the compiled model it was filled from (the ids and bodies
     of its elements), which attribute patches never change: `mjcf.Physics` holds one per

@@ -10,8 +10,8 @@ from __future__ import annotations
 import contextlib
 import enum
 
+from mjcf.patching.model_snapshot import ModelSnapshot, snapshots_supported
 from mjcf.physics import Physics, compile_mjcf_model
-from mujoco_physics.model_snapshot import ModelSnapshot, snapshots_supported
 from mujoco_physics.reset_state import ResetState
 
 __all__ = ["CompiledModel", "ModelUpdate"]
@@ -35,10 +35,11 @@ class CompiledModel:
     - RESTORED: `root` is the model of the last update and has not changed since. The
       model's parameters saved at the last update are written back, undoing writes made
       through `physics.bind` since.
-    - PATCHED: only attribute values of `root` changed, each one that `mjcf.model_patch`
-      proved it can write (`RootElement.attribute_changes_since`), and `patch` is True.
-      The saved parameters are written back, the new values are written into the model
-      in place, and the result is saved.
+    - PATCHED: only attribute values of `root` changed, each one that
+      `mjcf.patching.model_patch` proved it can write
+      (`RootElement.attribute_changes_since`), and `patch` is True. The saved parameters are
+      written back, the new values are written into the model in place, and the result is
+      saved.
     - LOADED: `root` changed otherwise and is compiled; the new model has the structure
       of the current one (`ModelSnapshot.load`: only float parameters differ), whose
       parameters are replaced by the new ones in place.
@@ -47,7 +48,8 @@ class CompiledModel:
       supported): a new Physics replaces the old one, which is freed.
 
     Every outcome but NEW_PHYSICS keeps the Physics object, its bindings and its views.
-    The look-ups that size patches keep go with the Physics (`mjcf.geom_size_cache`).
+    The look-ups that size patches keep go with the Physics
+    (`mjcf.patching.geom_size_cache`).
 
     The reset data is reused: `reset_context()` resets as `Physics.reset()` does, but
     copies the data its last reset left (`mujoco_physics.reset_state`) instead of

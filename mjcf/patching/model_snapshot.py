@@ -160,8 +160,8 @@ class ModelSnapshot:
     same structure, so a recompile that only changed parameters (colours, sizes,
     masses, ...) can reuse everything built on this model. `save()` takes the model's
     current parameters instead, once they were patched in place.
-    `mjcf.compiled_model.CompiledModel` decides when a reset restores, patches, loads or
-    compiles afresh.
+    `mjcf.patching.compiled_model.CompiledModel` decides when a reset restores, patches,
+    loads or compiles afresh.
 
     Raises (on construction):
       RuntimeError: if `snapshots_supported()` is False.
@@ -190,8 +190,8 @@ class ModelSnapshot:
 
     def save(self) -> None:
         """Takes the model's current arrays and `stat` as the ones to restore, after a patch
-        of the compiled model (`mjcf.model_patch`: it writes arrays, and `mj_setConst`
-        updates `stat`) made them those of a fresh compile."""
+        of the compiled model (`mjcf.patching.model_patch`: it writes arrays, and
+        `mj_setConst` updates `stat`) made them those of a fresh compile."""
         np.copyto(self._saved_buffer, self._buffer)
         self._stat = copy.copy(self._model.stat)
 

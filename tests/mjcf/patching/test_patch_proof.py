@@ -1,5 +1,5 @@
-"""mjcf.patch_proof proves value-only attributes and refuses those the compiler derives;
-manipulation.patch_proof runs it on the task suite's models."""
+"""mjcf.patching.patch_proof proves value-only attributes and refuses those the compiler
+derives; manipulation.patch_proof runs it on the task suite's models."""
 
 import copy
 import itertools
@@ -14,7 +14,7 @@ import pytest
 
 import mjcf
 from manipulation import patch_proof as suite_proof
-from mjcf import patch_proof
+from mjcf.patching import patch_proof
 
 _BALL = "<mujoco><worldbody><body><freejoint/><geom size='0.1'/></body></worldbody></mujoco>"
 
@@ -73,18 +73,18 @@ def test_on_an_unproven_release_the_command_caches_a_proof_that_the_next_process
     # proof runs on one scene for two pairs (the full corpus takes half a minute).
     fake_release = (
         "import mjcf\n"
-        "from mjcf import patchable_attributes\n"
+        "from mjcf.patching import patchable_attributes\n"
         "patchable_attributes.MUJOCO_VERSION = '0.0.0'\n"
     )
     prove = fake_release + (
-        "from mjcf import patch_proof\n"
+        "from mjcf.patching import patch_proof\n"
         "patch_proof._candidates = lambda: {('geom', 'rgba'), ('geom', 'pos')}\n"
         "scene = patch_proof._scenes()['primitives_radians.xml']\n"
         "patch_proof._scenes = lambda: {'scene': scene}\n"
         "raise SystemExit(patch_proof.main(corpus=(), argv=[]))\n"
     )
     use = fake_release + (
-        "from mjcf import patch_table\n"
+        "from mjcf.patching import patch_table\n"
         'root = mjcf.from_xml_string("<mujoco><worldbody><body><freejoint/>'
         "<geom name='ball' size='0.1'/></body></worldbody></mujoco>\")\n"
         "physics = mjcf.Physics.from_mjcf_model(root)\n"
@@ -134,8 +134,10 @@ def test_every_scene_file_is_package_data_so_that_a_wheel_ships_it():
     tomllib = pytest.importorskip("tomllib")  # Python 3.11 and later
     root = Path(mjcf.__file__).parent.parent
     with open(root / "pyproject.toml", "rb") as file:
-        package_data = tomllib.load(file)["tool"]["setuptools"]["package-data"]["mjcf"]
-    shipped = {path.name for pattern in package_data for path in (root / "mjcf").glob(pattern)}
+        package_data = tomllib.load(file)["tool"]["setuptools"]["package-data"]["mjcf.patching"]
+    shipped = {
+        path.name for pattern in package_data for path in (root / "mjcf" / "patching").glob(pattern)
+    }
     assert shipped == _SCENE_FILES
 
 
@@ -152,7 +154,10 @@ def test_the_proof_changes_the_models_it_is_given_besides_its_scenes(monkeypatch
 
 def test_the_library_module_run_as_a_command_names_the_suite_command():
     result = subprocess.run(
-        [sys.executable, "-m", "mjcf.patch_proof"], capture_output=True, text=True, timeout=120
+        [sys.executable, "-m", "mjcf.patching.patch_proof"],
+        capture_output=True,
+        text=True,
+        timeout=120,
     )
     assert result.returncode == 1
     assert "python -m manipulation.patch_proof" in result.stderr

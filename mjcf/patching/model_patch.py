@@ -3,25 +3,26 @@
 A change of an attribute value whose compiled field is the value itself (a colour, a
 friction, a gain, ...) does not need MuJoCo's compiler: writing the value into the field
 gives the same `MjModel` a recompile would. Which (tag, attribute) pairs are like that is
-not decided here but proven, for the installed MuJoCo, by `mjcf.patch_proof`: it
+not decided here but proven, for the installed MuJoCo, by `mjcf.patching.patch_proof`: it
 changes each candidate attribute on real models, patches one copy, recompiles another and
 requires every `MjModel` array and every `MjData` array after `mj_forward` to be
 bit-identical. The proven pairs, with, for each, whether `mj_setConst` must run after the
 write (for fields MuJoCo derives constants from, such as masses), are the generated table
-`mjcf/patchable_attributes.py` on the release it was proven on (CI fails when it is
-stale), or a proof cached for the installed release: `mjcf.patch_table` says which applies.
-Where none does, nothing is patched, and the first look warns.
+`mjcf/patching/patchable_attributes.py` on the release it was proven on (CI fails when it is
+stale), or a proof cached for the installed release: `mjcf.patching.patch_table` says which
+applies. Where none does, nothing is patched, and the first look warns.
 
 A change is patched when every changed (element, attribute) of
 `RootElement.attribute_changes_since` is proven, compiled into the Physics and resolvable:
 the value that compiles is set on the element itself or on one of its default classes (see
 `traversal_utils.default_value_source`). A change of a default-class template reaches every
 element of that model whose classes include the template's class. A geom's `size` feeds
-more fields than its own (bounds, its body's BVH and inertia): `mjcf.geom_size_patch`
-computes those. Anything else returns False and the caller recompiles.
+more fields than its own (bounds, its body's BVH and inertia):
+`mjcf.patching.geom_size_patch` computes those. Anything else returns False and the caller
+recompiles.
 
 After `mj_setConst`, the patch also brings up to date what the compiler computes at
-`qpos0` and `mj_setConst` does not: the model statistics (`mjcf.model_statistics`:
+`qpos0` and `mj_setConst` does not: the model statistics (`mjcf.patching.model_statistics`:
 `stat.center` and `stat.extent`, the viewer's framing, and `stat.meaninertia`, which scales
 the solver's tolerance), and the rest length of tendons whose `springlength` the compiler
 derives (a spatial tendon through a moved site). So a patched model stays bit-identical to
@@ -38,16 +39,10 @@ from __future__ import annotations
 import mujoco
 import numpy as np
 
-from mjcf import (
-    attribute_types,
-    binding,
-    geom_size_patch,
-    model_statistics,
-    patch_table,
-    traversal_utils,
-)
+from mjcf import attribute_types, binding, traversal_utils
 from mjcf.element import Element
-from mjcf.geom_size_cache import SizePatchCache
+from mjcf.patching import geom_size_patch, model_statistics, patch_table
+from mjcf.patching.geom_size_cache import SizePatchCache
 from mujoco_physics.field_layout import MODEL
 
 __all__ = ["patch_supported", "patch_model"]
@@ -74,7 +69,7 @@ _SEGMENT = "fromto"
 
 
 def patch_supported() -> bool:
-    """Whether a proven table applies to the installed MuJoCo (see `mjcf.patch_table`)."""
+    """Whether a proof applies to the installed MuJoCo (see `mjcf.patching.patch_table`)."""
     return patch_table.current() is not None
 
 
@@ -88,7 +83,7 @@ def patch_model(
         model is the compile of that model as it was before `changes`.
       changes: (element, XML attribute name) pairs, as `attribute_changes_since` gives them.
       cache: what earlier size patches of `physics`'s compiled model looked up (see
-        `mjcf.geom_size_cache`); None looks everything up afresh.
+        `mjcf.patching.geom_size_cache`); None looks everything up afresh.
       proven: (tag, attribute) -> whether `mj_setConst` must follow, in place of the
         table that applies (for the proof, which decides what a table holds).
 

@@ -1,10 +1,10 @@
-"""mujoco_physics.model_snapshot: the field-by-field struct copy used where MjModel's structs
+"""mjcf.patching.model_snapshot: the field-by-field struct copy used where MjModel's structs
 have no setter (mujoco before 3.16)."""
 
 import mujoco
 import numpy as np
 
-from mujoco_physics.model_snapshot import _copy_struct
+from mjcf.patching.model_snapshot import _copy_struct
 
 _SOURCE = """
 <mujoco>

@@ -10,7 +10,7 @@ mass-matrix diagonal. A value the model's `<statistic>` sets replaces the comput
 
 The arithmetic follows the compiler's order (sequential sums, the same distance formula),
 so that the numbers are bit-identical to a recompile's on the installed MuJoCo; that is
-checked by `mjcf/patch_proof.py` wherever a patch relies on it.
+checked by `mjcf/patching/patch_proof.py` wherever a patch relies on it.
 """
 
 from __future__ import annotations

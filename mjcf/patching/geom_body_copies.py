@@ -7,8 +7,8 @@ mass, density and `shellinertia`, under the model's `<compiler>` inertia setting
 whose inertia is explicit keeps it. Compiled with given sizes, the copy gives each body's
 derived rows (`DerivedRows`): the geoms' bounding radius and box, the body's bounding
 volume hierarchy and, when its inertia comes from its geoms, its mass, inertia and
-inertial frame. `mjcf.geom_size_patch` uses them; its module docstring says when a copy is
-trusted.
+inertial frame. `mjcf.patching.geom_size_patch` uses them; its module docstring says when a
+copy is trusted.
 """
 
 from __future__ import annotations

@@ -1,4 +1,5 @@
-"""mjcf.model_patch: writing changed attribute values into a compiled model equals a recompile.
+"""mjcf.patching.model_patch: writing changed attribute values into a compiled model equals
+a recompile.
 
 Each test changes a model, patches a copy of its old compile and recompiles it, then
 compares every MjModel array byte for byte (in the style of test_appearance.py).
@@ -11,8 +12,8 @@ import numpy as np
 import pytest
 
 import mjcf
-from mjcf import model_patch, patchable_attributes
-from mujoco_physics.model_snapshot import ModelSnapshot
+from mjcf.patching import model_patch, patchable_attributes
+from mjcf.patching.model_snapshot import ModelSnapshot
 
 _SCENE = """
 <mujoco model="scene">
@@ -176,7 +177,7 @@ def test_an_attached_models_values_patch_through_the_parent(scene):
 def test_nothing_patches_on_a_mujoco_the_table_was_not_proven_on(scene, monkeypatch, tmp_path):
     root, physics, count = scene
     monkeypatch.setattr(patchable_attributes, "MUJOCO_VERSION", "0.0.0")
-    # No proof of this release cached either (see tests/mjcf/test_patch_table.py).
+    # No proof of this release cached either (see tests/mjcf/patching/test_patch_table.py).
     monkeypatch.setenv("XDG_CACHE_HOME", str(tmp_path))
     root.find("geom", "upper").rgba = [0.2, 0.4, 0.6, 0.8]
     with pytest.warns(RuntimeWarning, match="python -m manipulation.patch_proof"):

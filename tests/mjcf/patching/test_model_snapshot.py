@@ -1,10 +1,10 @@
-"""mujoco_physics.model_snapshot: restoring a compiled model's parameters in place."""
+"""mjcf.patching.model_snapshot: restoring a compiled model's parameters in place."""
 
 import mujoco
 import numpy as np
 import pytest
 
-from mujoco_physics.model_snapshot import ModelSnapshot, snapshots_supported
+from mjcf.patching.model_snapshot import ModelSnapshot, snapshots_supported
 
 _XML = """
 <mujoco>

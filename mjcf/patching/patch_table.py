@@ -1,11 +1,11 @@
-"""Which MJCF attributes `mjcf.model_patch` may write in place on the installed MuJoCo.
+"""Which attributes `mjcf.patching.model_patch` may write in place on the installed MuJoCo.
 
 A (tag, attribute) pair patches only where a proof showed, on the installed MuJoCo release,
-that writing its compiled value gives the same model as a recompile (`mjcf.patch_proof`).
-The checked-in table `mjcf.patchable_attributes` holds the proof for one release. For any
-other, `PROOF_COMMAND` proves the pairs on it and caches the result in the user's cache
-directory, one file per MuJoCo release (`cache_path`); every later process reads that file,
-once.
+that writing its compiled value gives the same model as a recompile
+(`mjcf.patching.patch_proof`). The checked-in table `mjcf.patching.patchable_attributes`
+holds the proof for one release. For any other, `PROOF_COMMAND` proves the pairs on it and
+caches the result in the user's cache directory, one file per MuJoCo release (`cache_path`);
+every later process reads that file, once.
 
 Without a proof for the installed release nothing patches: every change of an MJCF
 attribute recompiles the model, which makes resets several times slower. That is never
@@ -26,12 +26,13 @@ from typing import NamedTuple
 
 import mujoco
 
-from mjcf import patchable_attributes
+from mjcf.patching import patchable_attributes
 
 __all__ = ["PROOF_COMMAND", "ProvenTable", "cache_path", "current", "write_cache"]
 
-#: The command that proves the table on the installed MuJoCo and caches it: `mjcf.patch_proof`
-#: on the manipulation suite's models (shipped in this distribution) and its own scenes.
+#: The command that proves the table on the installed MuJoCo and caches it:
+#: `mjcf.patching.patch_proof` on the manipulation suite's models (shipped in this
+#: distribution) and its own scenes.
 PROOF_COMMAND = "python -m manipulation.patch_proof"
 
 # The distribution whose version a cached proof was made by; its code decides how a pair
@@ -123,7 +124,7 @@ def _checked_in_table(table_version: str) -> ProvenTable:
         table_version,
         patchable_attributes.PROVEN,
         patchable_attributes.REFUSED,
-        "mjcf/patchable_attributes.py",
+        "mjcf/patching/patchable_attributes.py",
     )
 
 

@@ -1,27 +1,29 @@
-"""Proves which MJCF attributes `mjcf.model_patch` may write into a compiled model in place.
+"""Proves which attributes `mjcf.patching.model_patch` may write into a compiled model.
 
 The proof takes its models: the command `python -m manipulation.patch_proof [--write]
 [--extra-models DIR]` (about half a minute) runs it on the 25 manipulation tasks' models
-besides the scenes shipped here (`mjcf/patch_proof_scenes/`, `scene_models`), and is the one
-that checks the checked-in table; `main` is that command's body for any other corpus.
+besides the scenes shipped here (`mjcf/patching/patch_proof_scenes/`, `scene_models`), and
+is the one that checks the checked-in table; `main` is that command's body for any other
+corpus.
 
 For every candidate (tag, attribute) pair (a float attribute of an element that compiles to
 a MuJoCo object, whose binding field of the same name is an MjModel array) and every model
 of the corpus that has it, it changes the attribute's value, once on an element once on a
 default-class template, and once where nothing set it before (MuJoCo's built-in default
 applied), as far as the model has such elements, then patches a copy of the compiled model
-with `mjcf.model_patch`, recompiles the changed model, and requires every MjModel array
-(the name and text buffers too), size and struct (`opt`, `vis`, `stat`) to be bit-identical,
-and every MjData array after `mj_forward` from the same state. A pair is proven when every
-change of it in the corpus passed, by a plain write or, failing that, by a write followed by
-`mj_setConst`.
+with `mjcf.patching.model_patch`, recompiles the changed model, and requires every MjModel
+array (the name and text buffers too), size and struct (`opt`, `vis`, `stat`) to be
+bit-identical, and every MjData array after `mj_forward` from the same state. A pair is
+proven when every change of it in the corpus passed, by a plain write or, failing that, by a
+write followed by `mj_setConst`.
 
 Prints one line per pair: how it patches, or why it recompiles (the fields that differ).
-On the MuJoCo release the checked-in table `mjcf/patchable_attributes.py` was proven on, it
-exits 1 when the proof disagrees with the table, unless `--write`, which rewrites the table
-(for the project's maintainers, in a source checkout). On any other release it saves the
-proof in the user's cache directory (`mjcf.patch_table.cache_path`), where every later
-process finds it: patching is then on there, for exactly the pairs proven.
+On the MuJoCo release the checked-in table `mjcf/patching/patchable_attributes.py` was
+proven on, it exits 1 when the proof disagrees with the table, unless `--write`, which
+rewrites the table (for the project's maintainers, in a source checkout). On any other
+release it saves the proof in the user's cache directory
+(`mjcf.patching.patch_table.cache_path`), where every later process finds it: patching is
+then on there, for exactly the pairs proven.
 """
 
 from __future__ import annotations
@@ -41,15 +43,9 @@ import mujoco
 import numpy as np
 
 import mjcf
-from mjcf import (
-    attribute_types,
-    model_patch,
-    patch_table,
-    patchable_attributes,
-    schema,
-    traversal_utils,
-)
+from mjcf import attribute_types, schema, traversal_utils
 from mjcf.element import Element
+from mjcf.patching import model_patch, patch_table, patchable_attributes
 from mjcf.physics import compile_mjcf_model
 from mujoco_physics.field_layout import DATA_FIELDS, FAMILIES, MODEL, MODEL_FIELDS
 
@@ -66,7 +62,7 @@ _SCENE_FOLDER = "patch_proof_scenes"
 
 def _scenes() -> dict[str, str]:
     """The proof's own scenes, shipped with the package: file name -> MJCF text."""
-    folder = importlib.resources.files("mjcf") / _SCENE_FOLDER
+    folder = importlib.resources.files("mjcf.patching") / _SCENE_FOLDER
     files = sorted(
         (entry for entry in folder.iterdir() if entry.name.endswith(".xml")),
         key=lambda entry: entry.name,
@@ -78,9 +74,10 @@ def _scenes() -> dict[str, str]:
 class _Record:
     """What the corpus showed for one (tag, attribute) pair.
 
-    A change that `mjcf.model_patch` declines (a value with fewer numbers than the field, a
-    value from MuJoCo's built-in default, an actuator's default class) is neither for nor
-    against the pair: the patch refuses it at run time too, and the model recompiles.
+    A change that `mjcf.patching.model_patch` declines (a value with fewer numbers than the
+    field, a value from MuJoCo's built-in default, an actuator's default class) is neither
+    for nor against the pair: the patch refuses it at run time too, and the model
+    recompiles.
     """
 
     changes: int = 0
@@ -177,7 +174,8 @@ def _sites(root, candidates) -> dict:
     seen = set()
     for element in _all_elements(root):
         if type(element) is not Element:
-            # Attachment frames and model roots are never patched (see mjcf.model_patch).
+            # Attachment frames and model roots are never patched (see
+            # mjcf.patching.model_patch).
             continue
         tag = element._spec.name
         in_defaults = traversal_utils.is_default_template(element)
@@ -386,7 +384,7 @@ def _verdicts(records) -> tuple[dict, dict]:
         if record.changes == 0:
             refused[pair] = _NOT_IN_CORPUS
         elif record.changes == record.declined:
-            refused[pair] = "declined by mjcf.model_patch wherever the corpus has it"
+            refused[pair] = "declined by mjcf.patching.model_patch wherever the corpus has it"
         elif record.failures:
             shown = sorted(record.differing)
             refused[pair] = ", ".join(shown[:6]) + (" ..." if len(shown) > 6 else "")
@@ -398,8 +396,9 @@ def _verdicts(records) -> tuple[dict, dict]:
 def _table_text(proven: dict, refused: dict) -> str:
     return f'''"""Generated by `{patch_table.PROOF_COMMAND} --write`; do not edit by hand.
 
-The (tag, XML attribute) pairs whose compiled fields `mjcf.model_patch` writes in place,
-proven bit-identical to a recompile on mujoco {mujoco.__version__} (see `mjcf/patch_proof.py`).
+The (tag, XML attribute) pairs whose compiled fields `mjcf.patching.model_patch` writes in
+place, proven bit-identical to a recompile on mujoco {mujoco.__version__} (see
+`mjcf/patching/patch_proof.py`).
 """
 
 MUJOCO_VERSION = "{mujoco.__version__}"
@@ -421,7 +420,7 @@ def main(corpus: Iterable[tuple[str, mjcf.RootElement]], argv: list[str] | None 
     parser.add_argument(
         "--write",
         action="store_true",
-        help="rewrite the checked-in table mjcf/patchable_attributes.py (maintainers)",
+        help="rewrite the checked-in table mjcf/patching/patchable_attributes.py (maintainers)",
     )
     parser.add_argument(
         "--extra-models",
@@ -463,7 +462,8 @@ def main(corpus: Iterable[tuple[str, mjcf.RootElement]], argv: list[str] | None 
         return 0
     if proven != patchable_attributes.PROVEN or refused != patchable_attributes.REFUSED:
         print(
-            f"mjcf/patchable_attributes.py is stale: run `{patch_table.PROOF_COMMAND} --write`",
+            "mjcf/patching/patchable_attributes.py is stale: "
+            f"run `{patch_table.PROOF_COMMAND} --write`",
             file=sys.stderr,
         )
         return 1

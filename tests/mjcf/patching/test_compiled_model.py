@@ -1,12 +1,13 @@
-"""mjcf.compiled_model: each update outcome where its contract names it, and reset reuse."""
+"""mjcf.patching.compiled_model: each update outcome where its contract names it, and reset
+reuse."""
 
 import mujoco
 import numpy as np
 import pytest
 
 import mjcf
-from mjcf import compiled_model
-from mjcf.compiled_model import CompiledModel, ModelUpdate
+from mjcf.patching import compiled_model
+from mjcf.patching.compiled_model import CompiledModel, ModelUpdate
 
 _SCENE = """
 <mujoco>

@@ -1,4 +1,5 @@
-"""mjcf.patch_table: which proof applies on the installed MuJoCo, and never silently none."""
+"""mjcf.patching.patch_table: which proof applies on the installed MuJoCo, and never
+silently none."""
 
 import json
 import warnings
@@ -7,7 +8,7 @@ import mujoco
 import pytest
 
 import mjcf
-from mjcf import model_patch, patch_table, patchable_attributes
+from mjcf.patching import model_patch, patch_table, patchable_attributes
 
 _SCENE = """
 <mujoco>
@@ -61,7 +62,7 @@ def test_the_checked_in_table_applies_on_the_release_it_was_proven_on(monkeypatc
         warnings.simplefilter("error")
         table = patch_table.current()
     assert table.proven is patchable_attributes.PROVEN
-    assert table.source == "mjcf/patchable_attributes.py"
+    assert table.source == "mjcf/patching/patchable_attributes.py"
 
 
 def test_an_unproven_release_warns_once_naming_the_command_and_nothing_patches(
