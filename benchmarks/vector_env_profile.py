@@ -4,11 +4,15 @@ Task: `--task` (default manipulation's `reach_site_features`). For each N of `--
 a `ThreadedVectorEnv` of N sub-environments on k = min(N, cores) threads is stepped
 `--steps` times with every sub-environment step timed where it runs; per vector step:
 
+  hand-offs: worker wake-ups per vector step, counted by the pool (`hand_offs`): one
+    per worker (k - 1; the caller steps share 0 itself), however many sub-environments
+    its shard holds;
   wake-up us: from the caller entering the pool to a worker starting its first
     sub-environment (the hand-off), mean over workers and steps (and the least seen:
     the hand-off without load, which the model uses);
   barrier wait us: from a thread finishing its share to the last one finishing (what
-    each thread waits at the end-of-step barrier), mean over threads;
+    each thread waits at the end-of-step barrier), mean over threads; and per thread
+    (caller first, then workers 1..k-1) in a second table, with the share each steps;
   straggler us: the last share's end less the median share's end;
   step us: the whole vector step; and the threaded / loop speed-up next to the
     barrier-synchronised raw ceiling (k threads of raw `mj_step` on the N datas, in lock
@@ -69,9 +73,9 @@ class _Timings:
         return outcome
 
 
-def profile_steps(task: str, num_envs: int, steps: int) -> dict[str, float]:
-    """Per-vector-step wake-up, barrier wait, straggler and step time (us), and the
-    threaded / loop speed-up, for `num_envs` sub-environments."""
+def profile_steps(task: str, num_envs: int, steps: int) -> dict[str, object]:
+    """Per-vector-step hand-offs (counted), wake-up, barrier wait (mean, and per thread),
+    straggler and step time (us), for `num_envs` sub-environments."""
     envs = ThreadedVectorEnv([functools.partial(_make_env, task)] * num_envs)
     envs.reset(seed=0)
     k = envs.num_threads
@@ -80,6 +84,8 @@ def profile_steps(task: str, num_envs: int, steps: int) -> dict[str, float]:
     shape = envs.single_action_space.shape
     mode = envs.autoreset_mode
     wake, wait, straggle, total = [], [], [], []
+    wait_by_thread = np.zeros(k)
+    hand_offs = envs._pool.hand_offs
     for _ in range(steps):
         actions = rng.uniform(-1, 1, (num_envs, *shape)).astype(np.float32)
         ended = envs._episode_over.tolist()
@@ -95,12 +101,16 @@ def profile_steps(task: str, num_envs: int, steps: int) -> dict[str, float]:
         last = max(share_ends)
         wake.extend(timings.starts[s::k].min() - begin for s in range(1, k))
         wait.extend(last - end for end in share_ends)
+        wait_by_thread += last - np.array(share_ends)
         straggle.append(last - statistics.median(share_ends))
         total.append(finish - begin)
+    hand_offs = (envs._pool.hand_offs - hand_offs) / steps
     envs.close()
     us = 1e6
     return {
         "threads": k,
+        "hand_offs": hand_offs,
+        "wait_by_thread": (wait_by_thread / steps * us).tolist(),
         "wake": statistics.mean(wake) * us if wake else 0.0,
         "wake_min": min(wake) * us if wake else 0.0,
         "wait": statistics.mean(wait) * us,
@@ -243,21 +253,36 @@ def main() -> None:
     )
     loop_us = loop_step_us(args.task, args.steps)
     print(
-        "\n| N | threads | wake-up us (min) | barrier wait us | straggler us | vector step us "
-        "| threaded/loop | raw lock-step ceiling |"
+        "\n| N | threads | hand-offs per step | wake-up us (min) | barrier wait us "
+        "| straggler us | vector step us | threaded/loop | raw lock-step ceiling |"
     )
-    print("|---|---|---|---|---|---|---|---|")
+    print("|---|---|---|---|---|---|---|---|---|")
     hand_offs = []
+    rows = {}
     for size in sizes:
-        row = profile_steps(args.task, size, args.steps)
+        row = rows[size] = profile_steps(args.task, size, args.steps)
         ceiling = raw_ceiling(args.task, size, args.steps)
         speedup = size * loop_us / row["step"]
-        hand_offs.append(row["wake_min"])
+        if row["threads"] > 1:  # one thread hands nothing off
+            hand_offs.append(row["wake_min"])
         print(
-            f"| {size} | {row['threads']} | {row['wake']:.0f} ({row['wake_min']:.0f}) | "
-            f"{row['wait']:.0f} | "
-            f"{row['straggler']:.0f} | {row['step']:.0f} | {speedup:.2f}x | {ceiling:.2f}x |"
+            f"| {size} | {row['threads']} | {row['hand_offs']:g} | {row['wake']:.0f} "
+            f"({row['wake_min']:.0f}) | {row['wait']:.0f} | {row['straggler']:.0f} "
+            f"| {row['step']:.0f} | {speedup:.2f}x | {ceiling:.2f}x |"
         )
+    print(
+        "\nbarrier wait per thread, us per vector step (thread: sub-environments it steps; "
+        "thread 0 is the caller):"
+    )
+    widest = max(row["threads"] for row in rows.values())
+    print("| N | " + " | ".join(f"thread {s}" for s in range(widest)) + " |")
+    print("|---|" + "---|" * widest)
+    for size, row in rows.items():
+        k = row["threads"]
+        cells = [
+            f"{len(range(s, size, k))}: {wait:.0f}" for s, wait in enumerate(row["wait_by_thread"])
+        ]
+        print(f"| {size} | " + " | ".join(cells) + " |")
     total, mujoco_us, releases = split_step(args.task, args.steps)
     python_us = total - mujoco_us
     print(
