@@ -420,48 +420,28 @@ def test_vision_sub_envs_render_their_cameras_on_worker_threads():
     envs.close()
 
 
-def test_vision_frames_from_worker_threads_equal_those_of_a_plain_loop():
-    # Each sub-environment renders on its own thread with its own GL context; the frames
-    # must be those one thread rendering the same episodes in turn would give.
-    def make():
-        return GymnasiumEnv(manipulation.load("reach_site_vision"))
-
-    envs = ThreadedVectorEnv([make] * 2, num_threads=2)
-    loop = [make() for _ in range(2)]
-    actions = np.random.default_rng(0).uniform(-0.5, 0.5, (2, 2, 9)).astype(np.float32)
-    observations, _ = envs.reset(seed=3)
-    expected = [env.reset(seed=3 + i)[0]["front_close"] for i, env in enumerate(loop)]
-    np.testing.assert_array_equal(observations["front_close"], np.stack(expected))
-    for step_actions in actions:
-        observations, *_ = envs.step(step_actions)
-        expected = [env.step(a)[0]["front_close"] for env, a in zip(loop, step_actions)]
-        np.testing.assert_array_equal(observations["front_close"], np.stack(expected))
-    assert observations["front_close"].std() > 0
-    envs.close()
-    for env in loop:
-        env.close()
-
-
-def test_vision_frames_of_unequal_shards_equal_a_loops_and_render_in_one_wake_up():
-    # 5 vision sub-environments on 3 threads, each rendering its cameras (observations)
-    # and `render()` with the GL context it made on its own thread.
+def test_vision_frames_from_unequal_shards_equal_a_loops_and_render_in_one_wake_up():
+    # 3 vision sub-environments on 2 threads (the caller renders 0 and 2, the worker 1),
+    # each rendering its cameras (observations) and `render()` with the GL context it
+    # made on its own thread.
     def make():
         return GymnasiumEnv(
             manipulation.load("reach_site_vision"), render_mode="rgb_array", width=64, height=48
         )
 
-    envs = ThreadedVectorEnv([make] * 5, num_threads=3)
-    loop = [make() for _ in range(5)]
-    actions = np.random.default_rng(1).uniform(-0.5, 0.5, (2, 5, 9)).astype(np.float32)
+    envs = ThreadedVectorEnv([make] * 3, num_threads=2)
+    loop = [make() for _ in range(3)]
+    actions = np.random.default_rng(1).uniform(-0.5, 0.5, (2, 3, 9)).astype(np.float32)
     observations, _ = envs.reset(seed=7)
     expected = [env.reset(seed=7 + i)[0]["front_close"] for i, env in enumerate(loop)]
     np.testing.assert_array_equal(observations["front_close"], np.stack(expected))
     for step_actions in actions:
         before = envs._pool.hand_offs
         observations, *_ = envs.step(step_actions)
-        assert envs._pool.hand_offs - before == 2
+        assert envs._pool.hand_offs - before == 1
         expected = [env.step(a)[0]["front_close"] for env, a in zip(loop, step_actions)]
         np.testing.assert_array_equal(observations["front_close"], np.stack(expected))
+    assert observations["front_close"].std() > 0  # a picture, not a blank buffer
     frames = envs.render()
     for frame, env in zip(frames, loop):
         np.testing.assert_array_equal(frame, env.render())
