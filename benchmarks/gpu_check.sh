@@ -1,9 +1,10 @@
 #!/usr/bin/env bash
-# The GPU check, in one call on a machine with an NVIDIA GPU, in under 8 minutes: the warp
+# The GPU check, in one call on a machine with an NVIDIA GPU, in about 8 minutes: the warp
 # tests on cuda:0, the batch benchmark at 1,024 to 8,192 worlds beside raw MuJoCo Warp and
 # the CPU ceiling (raw mj_step on all cores), then the vector envs' tables on all cores
-# (features N up to 64, vision up to 16) and the threaded env's profile. Prints the
-# tables; each part has its own time limit.
+# (features N up to 64, vision up to 16) and the threaded env's profile (features, and
+# vision's renders in flight). Prints the tables; each part has its own time limit (in
+# all 490 s at most).
 #
 # Usage: bash benchmarks/gpu_check.sh
 # Set-up: uses .venv when it exists (carry it to the machine), else makes one and installs
@@ -48,5 +49,8 @@ timeout 40 python benchmarks/vector_env.py --tasks reach_site_vision --no-overhe
   --sizes 1,4,8,16 --repeats 2 --steps 10 --no-ray
 echo "== where the threaded env's time goes"
 timeout 30 python benchmarks/vector_env_profile.py --sizes 4,16,32 --steps 20
+echo "== the threaded vision env: renders in flight at once on $(nproc) threads"
+timeout 40 python benchmarks/vector_env_profile.py --task reach_site_vision --sizes 16 --steps 10 \
+  --no-switch-intervals
 
 echo "kernel cache: $(cuda_binaries) CUDA binaries after the run (more: some compiled here)"

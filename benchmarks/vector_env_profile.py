@@ -4,18 +4,27 @@ Task: `--task` (default manipulation's `reach_site_features`). For each N of `--
 a `ThreadedVectorEnv` of N sub-environments on k = min(N, cores) threads is stepped
 `--steps` times with every sub-environment step timed where it runs; per vector step:
 
+  hand-offs: worker wake-ups per vector step, counted by the pool (`hand_offs`): one
+    per worker (k - 1; the caller steps share 0 itself), however many sub-environments
+    its shard holds;
   wake-up us: from the caller entering the pool to a worker starting its first
     sub-environment (the hand-off), mean over workers and steps (and the least seen:
     the hand-off without load, which the model uses);
   barrier wait us: from a thread finishing its share to the last one finishing (what
-    each thread waits at the end-of-step barrier), mean over threads;
+    each thread waits at the end-of-step barrier), mean over threads; and per thread
+    (caller first, then workers 1..k-1) in a second table, with the share each steps;
   straggler us: the last share's end less the median share's end;
+  renders in flight: for a task whose observations render (a vision task), the
+    `mujoco.Renderer.render` calls of a vector step in flight at once, on average (their
+    summed time over the time any was in flight): k when every thread renders at once,
+    1 when the renders serialise (each thread renders with its own GL context);
   step us: the whole vector step; and the threaded / loop speed-up next to the
     barrier-synchronised raw ceiling (k threads of raw `mj_step` on the N datas, in lock
     step through the same pool; no Python of the environment at all).
 
 Then, from one sub-environment stepped alone: its CPU time, the part that is MuJoCo
-(`mj_step*` calls timed on this thread) and the rest (Python, the GIL held); the GIL
+(`mj_step*`, `mjr_render` and `mjr_readPixels` calls timed on this thread) and the rest
+(Python, the GIL held); the GIL
 releases per sub-environment step (calls into `mujoco` and ctypes, each releasing the GIL
 and taking it back, counted with `sys.setprofile`); and the threaded env's speed at
 GIL switch intervals of 5 ms (CPython's default), 0.5 ms and 0.05 ms, over the loop's.
@@ -26,7 +35,7 @@ Last, a model of c cores (default 16): a vector step takes
 one thread at a time, h: one hand-off), against N * (M + P) for a loop.
 
 Usage: python benchmarks/vector_env_profile.py [--task T] [--sizes 4,16,32] [--steps N]
-    [--model-cores 16]
+    [--model-cores 16] [--no-switch-intervals]
 """
 
 import argparse
@@ -49,10 +58,51 @@ import numpy as np  # noqa: E402
 import manipulation  # noqa: E402
 from composer.gym import GymnasiumEnv, ThreadedVectorEnv  # noqa: E402
 from composer.gym.sub_env_vector import step_sub_env  # noqa: E402
+from composer.gym.thread_pool import PinnedThreadPool  # noqa: E402
 
 
 def _make_env(task: str) -> GymnasiumEnv:
     return GymnasiumEnv(manipulation.load(task))
+
+
+class _RenderSpans:
+    """Records (start, end) of every `mujoco.Renderer.render` call while installed."""
+
+    def __init__(self):
+        self.spans: list[tuple[float, float]] = []
+        self._original = mujoco.Renderer.render
+
+    def __enter__(self) -> "_RenderSpans":
+        original, spans = self._original, self.spans
+
+        def timed(renderer, *args, **kwargs):
+            start = time.perf_counter()
+            try:
+                return original(renderer, *args, **kwargs)
+            finally:
+                spans.append((start, time.perf_counter()))  # list.append is atomic
+
+        mujoco.Renderer.render = timed
+        return self
+
+    def __exit__(self, *exc_info) -> None:
+        mujoco.Renderer.render = self._original
+
+    def in_flight(self) -> float | None:
+        """Summed render time over the time any render was in flight, for the spans
+        recorded since the last call (None for none); clears them."""
+        spans, self.spans[:] = sorted(self.spans), []
+        if not spans:
+            return None
+        busy, (start, end) = 0.0, spans[0]
+        for next_start, next_end in spans[1:]:
+            if next_start > end:
+                busy += end - start
+                start, end = next_start, next_end
+            else:
+                end = max(end, next_end)
+        busy += end - start
+        return sum(b - a for a, b in spans) / busy if busy > 0 else 1.0
 
 
 class _Timings:
@@ -69,9 +119,9 @@ class _Timings:
         return outcome
 
 
-def profile_steps(task: str, num_envs: int, steps: int) -> dict[str, float]:
-    """Per-vector-step wake-up, barrier wait, straggler and step time (us), and the
-    threaded / loop speed-up, for `num_envs` sub-environments."""
+def profile_steps(task: str, num_envs: int, steps: int) -> dict[str, object]:
+    """Per-vector-step hand-offs (counted), wake-up, barrier wait (mean, and per thread),
+    straggler and step time (us), for `num_envs` sub-environments."""
     envs = ThreadedVectorEnv([functools.partial(_make_env, task)] * num_envs)
     envs.reset(seed=0)
     k = envs.num_threads
@@ -80,27 +130,40 @@ def profile_steps(task: str, num_envs: int, steps: int) -> dict[str, float]:
     shape = envs.single_action_space.shape
     mode = envs.autoreset_mode
     wake, wait, straggle, total = [], [], [], []
+    wait_by_thread = np.zeros(k)
+    hand_offs = envs._pool.hand_offs
+    renders = _RenderSpans()
+    in_flight = []
     for _ in range(steps):
         actions = rng.uniform(-1, 1, (num_envs, *shape)).astype(np.float32)
         ended = envs._episode_over.tolist()
         arguments = {i: (actions[i], mode, ended[i]) for i in range(num_envs)}
-        begin = time.perf_counter()
-        envs._map(
-            lambda env, i, *rest: timings.timed_step(i, env, *rest),
-            {i: (i, *arguments[i]) for i in arguments},
-            envs._store,
-        )
-        finish = time.perf_counter()
+        with renders:
+            begin = time.perf_counter()
+            envs._map(
+                lambda env, i, *rest: timings.timed_step(i, env, *rest),
+                {i: (i, *arguments[i]) for i in arguments},
+                envs._store,
+            )
+            finish = time.perf_counter()
+        step_in_flight = renders.in_flight()
+        if step_in_flight is not None:
+            in_flight.append(step_in_flight)
         share_ends = [timings.ends[s::k].max() for s in range(k)]
         last = max(share_ends)
         wake.extend(timings.starts[s::k].min() - begin for s in range(1, k))
         wait.extend(last - end for end in share_ends)
+        wait_by_thread += last - np.array(share_ends)
         straggle.append(last - statistics.median(share_ends))
         total.append(finish - begin)
+    hand_offs = (envs._pool.hand_offs - hand_offs) / steps
     envs.close()
     us = 1e6
     return {
         "threads": k,
+        "hand_offs": hand_offs,
+        "renders_in_flight": statistics.mean(in_flight) if in_flight else None,
+        "wait_by_thread": (wait_by_thread / steps * us).tolist(),
         "wake": statistics.mean(wake) * us if wake else 0.0,
         "wake_min": min(wake) * us if wake else 0.0,
         "wait": statistics.mean(wait) * us,
@@ -137,9 +200,8 @@ def raw_ceiling(task: str, num_envs: int, steps: int) -> float:
         for data in datas:
             mujoco.mj_step(model, data, sub_steps)
     single = time.perf_counter() - start
-    # A vector env of raw stepping: the pool is the threaded env's own.
-    envs = ThreadedVectorEnv([functools.partial(_make_env, task)] * num_envs)
-    pool = envs._pool
+    # The threaded env's pool class, with its share of threads, and nothing else.
+    pool = PinnedThreadPool(num_envs)
 
     def step(i: int) -> None:
         mujoco.mj_step(model, datas[i], sub_steps)
@@ -149,7 +211,7 @@ def raw_ceiling(task: str, num_envs: int, steps: int) -> float:
     for _ in range(steps):
         pool.run(step, indices)
     pooled = time.perf_counter() - start
-    envs.close()
+    pool.close()
     return single / pooled
 
 
@@ -160,7 +222,8 @@ def split_step(task: str, steps: int) -> tuple[float, float, float]:
     env.reset(seed=0)
     action = np.zeros(env.action_space.shape, env.action_space.dtype)
     mujoco_time = [0.0]
-    originals = {name: getattr(mujoco, name) for name in ("mj_step", "mj_step1", "mj_step2")}
+    released = ("mj_step", "mj_step1", "mj_step2", "mjr_render", "mjr_readPixels")
+    originals = {name: getattr(mujoco, name) for name in released}
 
     def timed(function, *args):
         start = time.thread_time()
@@ -234,6 +297,11 @@ def main() -> None:
     parser.add_argument("--sizes", default="4,8")
     parser.add_argument("--steps", type=int, default=50)
     parser.add_argument("--model-cores", type=int, default=16)
+    parser.add_argument(
+        "--no-switch-intervals",
+        action="store_true",
+        help="leave out the GIL switch interval sweep (which builds the largest N again)",
+    )
     args = parser.parse_args()
     cores = os.cpu_count() or 1
     sizes = [int(size) for size in args.sizes.split(",")]
@@ -243,33 +311,53 @@ def main() -> None:
     )
     loop_us = loop_step_us(args.task, args.steps)
     print(
-        "\n| N | threads | wake-up us (min) | barrier wait us | straggler us | vector step us "
-        "| threaded/loop | raw lock-step ceiling |"
+        "\n| N | threads | hand-offs per step | wake-up us (min) | barrier wait us "
+        "| straggler us | renders in flight | vector step us | threaded/loop "
+        "| raw lock-step ceiling |"
     )
-    print("|---|---|---|---|---|---|---|---|")
+    print("|---|---|---|---|---|---|---|---|---|---|")
     hand_offs = []
+    rows = {}
     for size in sizes:
-        row = profile_steps(args.task, size, args.steps)
+        row = rows[size] = profile_steps(args.task, size, args.steps)
         ceiling = raw_ceiling(args.task, size, args.steps)
         speedup = size * loop_us / row["step"]
-        hand_offs.append(row["wake_min"])
+        flight = row["renders_in_flight"]
+        if row["threads"] > 1:  # one thread hands nothing off
+            hand_offs.append(row["wake_min"])
         print(
-            f"| {size} | {row['threads']} | {row['wake']:.0f} ({row['wake_min']:.0f}) | "
-            f"{row['wait']:.0f} | "
-            f"{row['straggler']:.0f} | {row['step']:.0f} | {speedup:.2f}x | {ceiling:.2f}x |"
+            f"| {size} | {row['threads']} | {row['hand_offs']:g} | {row['wake']:.0f} "
+            f"({row['wake_min']:.0f}) | {row['wait']:.0f} | {row['straggler']:.0f} | "
+            + ("-" if flight is None else f"{flight:.2f} of {row['threads']}")
+            + f" | {row['step']:.0f} | {speedup:.2f}x | {ceiling:.2f}x |"
         )
+    print(
+        "\nbarrier wait per thread, us per vector step (thread: sub-environments it steps; "
+        "thread 0 is the caller):"
+    )
+    widest = max(row["threads"] for row in rows.values())
+    print("| N | " + " | ".join(f"thread {s}" for s in range(widest)) + " |")
+    print("|---|" + "---|" * widest)
+    for size, row in rows.items():
+        k = row["threads"]
+        cells = [
+            f"{len(range(s, size, k))}: {wait:.0f}" for s, wait in enumerate(row["wait_by_thread"])
+        ]
+        print(f"| {size} | " + " | ".join(cells) + " |")
     total, mujoco_us, releases = split_step(args.task, args.steps)
     python_us = total - mujoco_us
     print(
         f"\nloop: {loop_us:.0f} us per step; CPU per sub-env step {total:.0f} us: MuJoCo "
-        f"{mujoco_us:.0f}, Python (GIL held) {python_us:.0f} ({python_us / total:.0%}); "
+        f"(steps and renders, GIL released) {mujoco_us:.0f}, Python (GIL held) "
+        f"{python_us:.0f} ({python_us / total:.0%}); "
         f"GIL releases (calls into mujoco or ctypes) per sub-env step: {releases:.0f}"
     )
-    speedups = switch_interval_speedups(args.task, max(sizes), args.steps)
-    print(
-        f"threaded/loop at N = {max(sizes)} by GIL switch interval: "
-        + ", ".join(f"{interval * 1e3:g} ms {s:.2f}x" for interval, s in speedups.items())
-    )
+    if not args.no_switch_intervals:
+        speedups = switch_interval_speedups(args.task, max(sizes), args.steps)
+        print(
+            f"threaded/loop at N = {max(sizes)} by GIL switch interval: "
+            + ", ".join(f"{interval * 1e3:g} ms {s:.2f}x" for interval, s in speedups.items())
+        )
     hand_off = min(hand_offs) if hand_offs else 0.0
     c = args.model_cores
     print(

@@ -6,15 +6,20 @@ Slot i belongs to share `i % k`; share 0 is run by the thread that made the pool
 changes (what an OpenGL context bound to a thread needs), at k = 1 nothing is handed to
 another thread at all, and the calling thread steps a share instead of waiting idle.
 
+A call hands off once per worker, whatever the number of slots in its share: the
+worker runs all of its selected slots per wake-up (`hand_offs` counts the wake-ups).
 The hand-off is the cheapest of those `benchmarks/thread_pool.py` compares (a
 `threading.Barrier`, per-worker `threading.Event`s, spinning before sleeping, the queues
 this pool replaced): each worker sleeps on a `threading.Lock` of its own, which the
-caller releases to start it, and releases a second lock of its own when its share is
-done, which the caller acquires. Only workers with a slot in the call are woken. The
-state shared with the workers is allocated once; a call makes no queue, job or closure,
-only the dict of results it returns.
+caller releases to start it. The end of a call is one lock for all workers: each worker
+takes a ticket when its share is done and the last one releases it, so the caller,
+whatever the number of workers, sleeps and wakes (and takes the interpreter lock back)
+at most once per call rather than once per worker. Only workers with a slot in the call
+are woken. The state shared with the workers is allocated once; a call makes no queue,
+job or closure, only the dict of results it returns and one ticket counter.
 """
 
+import itertools
 import math
 import os
 import threading
@@ -40,11 +45,21 @@ class WorkerDiedError(RuntimeError):
 class _Call:
     """The state the caller shares with the workers, allocated once per pool.
 
-    A worker reads it between acquiring its start lock and releasing its done lock; the
-    caller writes it only while no worker of the call is running.
+    A worker reads it between acquiring its start lock and taking its ticket; the caller
+    writes it only while no worker of the call is running.
     """
 
-    __slots__ = ("task", "selected", "results", "errors", "failed", "stopping")
+    __slots__ = (
+        "task",
+        "selected",
+        "results",
+        "errors",
+        "failed",
+        "stopping",
+        "tickets",
+        "started",
+        "all_done",
+    )
 
     def __init__(self, size: int):
         self.task: Callable[[int], Any] | None = None
@@ -53,6 +68,13 @@ class _Call:
         self.errors: list[BaseException | None] = [None] * size
         self.failed = False
         self.stopping = False
+        # A worker done with its share takes the next ticket (`next` on an
+        # `itertools.count` is one step under the interpreter lock: no two workers get
+        # the same); the one whose ticket is `started`, the last, releases `all_done`.
+        self.tickets = itertools.count(1)
+        self.started = 0
+        self.all_done = threading.Lock()
+        self.all_done.acquire()
 
 
 class _Worker:
@@ -62,9 +84,8 @@ class _Worker:
         self.share = share
         self.start = threading.Lock()
         self.start.acquire()
-        self.done = threading.Lock()
-        self.done.acquire()
         self.running = False  # started and not yet waited for (by the caller only)
+        self.finished = False  # took its ticket in the call under way
         self.dead = False
         # The thread holds the worker and the call, never the pool, so that a pool
         # nobody refers to any more is collected and stops its threads.
@@ -73,7 +94,7 @@ class _Worker:
 
 
 def _serve(worker: _Worker, call: _Call) -> None:
-    start, done, share = worker.start, worker.done, worker.share
+    start, share = worker.start, worker.share
     selected, results, errors = call.selected, call.results, call.errors
     while True:
         start.acquire()
@@ -87,7 +108,11 @@ def _serve(worker: _Worker, call: _Call) -> None:
                 except BaseException as error:  # raised in the caller, with the slot
                     errors[i] = error
                     call.failed = True
-        done.release()
+        # Marked before the ticket: once the last ticket is taken the caller may start
+        # the next call, which clears the mark.
+        worker.finished = True
+        if next(call.tickets) == call.started:
+            call.all_done.release()
         if call.stopping:  # `close` gave up waiting for this call
             return
 
@@ -123,6 +148,7 @@ class PinnedThreadPool:
             for s in range(1, self.num_threads)
         ]
         self._wanted = [False] * self.num_threads
+        self._hand_offs = 0
         self._busy = False  # a call is under way, or one was left unfinished
         self._closed = False
 
@@ -130,6 +156,12 @@ class PinnedThreadPool:
     def closed(self) -> bool:
         """Whether `close` was called."""
         return self._closed
+
+    @property
+    def hand_offs(self) -> int:
+        """Worker wake-ups since the pool was made: one per worker with a selected slot
+        per `run`, however many of its slots it runs (the owner's own share is none)."""
+        return self._hand_offs
 
     def thread_of(self, index: int) -> threading.Thread:
         """The thread that runs slot `index`."""
@@ -225,14 +257,21 @@ class PinnedThreadPool:
             )
 
     def _start_workers(self) -> None:
-        wanted = self._wanted
+        wanted, call = self._wanted, self._call
+        starting = []
         for s, worker in enumerate(self._workers, start=1):
             if not wanted[s]:
                 continue
             if worker.dead:
                 self._fail_share(worker)
                 continue
+            starting.append(worker)
+        call.tickets = itertools.count(1)
+        call.started = len(starting)
+        self._hand_offs += len(starting)
+        for worker in starting:
             worker.running = True
+            worker.finished = False
             worker.start.release()
 
     def _run_own_share(self, task: Callable[[int], Any]) -> None:
@@ -247,19 +286,32 @@ class PinnedThreadPool:
                     call.failed = True
 
     def _wait_for_workers(self, deadline: float = math.inf) -> None:
-        """Waits for the running workers (until `deadline`, a `time.monotonic()`)."""
-        for worker in self._workers:
-            if not worker.running:
-                continue
-            while not worker.done.acquire(
-                timeout=min(_LIVENESS_POLL_S, max(0.0, deadline - time.monotonic()))
-            ):
-                if not worker.thread.is_alive():
+        """Waits for the running workers (until `deadline`, a `time.monotonic()`).
+
+        The last worker to finish releases `all_done`. A worker whose thread ended
+        before finishing took no ticket, so that release never comes: its share is
+        failed, and the wait ends once every other running worker has finished.
+        """
+        running = [worker for worker in self._workers if worker.running]
+        if not running:
+            return
+        all_done = self._call.all_done
+        while not all_done.acquire(
+            timeout=min(_LIVENESS_POLL_S, max(0.0, deadline - time.monotonic()))
+        ):
+            for worker in running:
+                if not worker.finished and not worker.dead and not worker.thread.is_alive():
                     worker.dead = True
                     self._fail_share(worker)
-                    break
-                if time.monotonic() >= deadline:
-                    return
+            # Only with a worker dead: otherwise the last ticket, and the release, may
+            # still be on their way, and must not be left for the next call to find.
+            if any(worker.dead for worker in running) and all(
+                worker.finished or worker.dead for worker in running
+            ):
+                break
+            if time.monotonic() >= deadline:
+                return
+        for worker in running:
             worker.running = False
 
     def _fail_share(self, worker: _Worker) -> None:

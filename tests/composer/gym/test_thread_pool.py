@@ -2,6 +2,7 @@
 
 import ctypes
 import threading
+import time
 
 import pytest
 
@@ -54,6 +55,36 @@ def test_default_is_one_thread_per_core_at_most_one_per_slot(monkeypatch):
         pool = PinnedThreadPool(size)
         assert pool.num_threads == expected
         pool.close()
+
+
+def test_each_worker_is_woken_once_per_call_however_many_of_its_slots_run():
+    # 10 slots on 3 threads: worker 1 has slots 1, 4, 7; worker 2 has 2, 5, 8; the
+    # caller runs 0, 3, 6, 9 itself and wakes nobody for them.
+    pool = PinnedThreadPool(10, 3)
+    woken = []
+    for indices in (range(10), [0, 3, 9], [1, 4, 7], [2, 1], [5]):
+        before = pool.hand_offs
+        pool.run(lambda i: i, indices)
+        woken.append(pool.hand_offs - before)
+    assert woken == [2, 0, 1, 2, 1]
+    pool.close()
+
+
+def test_a_call_returns_only_once_every_worker_has_finished_whichever_is_last():
+    # Workers finish in a different order on each call, one of them after more than the
+    # caller's 0.25 s liveness poll: every task must have returned when `run` does.
+    pool = PinnedThreadPool(12, 6)
+    for call, last in enumerate((5, 1, 3, 2, 4)):
+        finished = [False] * 12
+
+        def task(i, last=last, finished=finished):
+            time.sleep(0.3 if i % 6 == last else 0.001 * (i % 6))
+            finished[i] = True
+            return i
+
+        assert pool.run(task, range(12)) == {i: i for i in range(12)}, call
+        assert all(finished), call
+    pool.close()
 
 
 @pytest.mark.parametrize("num_threads", [1, 2])

@@ -192,6 +192,27 @@ def test_gymnasium_env_sub_envs_writing_into_their_rows_match_sync_vector_env(mo
     ours.close()
 
 
+@pytest.mark.parametrize("mode", list(AutoresetMode))
+def test_shards_of_unequal_size_match_a_loop_and_wake_each_worker_once_per_step(mode):
+    # 7 sub-environments on 3 threads: the caller steps 0, 3, 6 and each worker two
+    # or three, all in one wake-up per step; every output is the loop's.
+    lengths = [1, 3, 2, 2, 4, 1, 3]
+    ours = ThreadedVectorEnv(_sliders(lengths), 3, autoreset_mode=mode)
+    reference = SyncVectorEnv(_sliders(lengths), autoreset_mode=mode)
+    _assert_same_observations(ours.reset(seed=2)[0], reference.reset(seed=2)[0])
+    actions = np.linspace(-1.0, 1.0, 7)[:, None]
+    _assert_steps_match(ours, reference, mode, actions, _assert_same_observations)
+    woken = []
+    for _ in range(5):
+        if mode is AutoresetMode.DISABLED:
+            ours.reset()
+        before = ours._pool.hand_offs
+        ours.step(actions)
+        woken.append(ours._pool.hand_offs - before)
+    assert woken == [2] * 5
+    ours.close()
+
+
 class _InfoEnv(gymnasium.Env):
     """Returns infos of every kind Gymnasium batches: numbers, arrays, objects, nested
     dicts, and keys that only some sub-environments have."""
@@ -399,23 +420,32 @@ def test_vision_sub_envs_render_their_cameras_on_worker_threads():
     envs.close()
 
 
-def test_vision_frames_from_worker_threads_equal_those_of_a_plain_loop():
-    # Each sub-environment renders on its own thread with its own GL context; the frames
-    # must be those one thread rendering the same episodes in turn would give.
+def test_vision_frames_from_unequal_shards_equal_a_loops_and_render_in_one_wake_up():
+    # 3 vision sub-environments on 2 threads (the caller renders 0 and 2, the worker 1),
+    # each rendering its cameras (observations) and `render()` with the GL context it
+    # made on its own thread.
     def make():
-        return GymnasiumEnv(manipulation.load("reach_site_vision"))
+        return GymnasiumEnv(
+            manipulation.load("reach_site_vision"), render_mode="rgb_array", width=64, height=48
+        )
 
-    envs = ThreadedVectorEnv([make] * 2, num_threads=2)
-    loop = [make() for _ in range(2)]
-    actions = np.random.default_rng(0).uniform(-0.5, 0.5, (2, 2, 9)).astype(np.float32)
-    observations, _ = envs.reset(seed=3)
-    expected = [env.reset(seed=3 + i)[0]["front_close"] for i, env in enumerate(loop)]
+    envs = ThreadedVectorEnv([make] * 3, num_threads=2)
+    loop = [make() for _ in range(3)]
+    actions = np.random.default_rng(1).uniform(-0.5, 0.5, (2, 3, 9)).astype(np.float32)
+    observations, _ = envs.reset(seed=7)
+    expected = [env.reset(seed=7 + i)[0]["front_close"] for i, env in enumerate(loop)]
     np.testing.assert_array_equal(observations["front_close"], np.stack(expected))
     for step_actions in actions:
+        before = envs._pool.hand_offs
         observations, *_ = envs.step(step_actions)
+        assert envs._pool.hand_offs - before == 1
         expected = [env.step(a)[0]["front_close"] for env, a in zip(loop, step_actions)]
         np.testing.assert_array_equal(observations["front_close"], np.stack(expected))
-    assert observations["front_close"].std() > 0
+    assert observations["front_close"].std() > 0  # a picture, not a blank buffer
+    frames = envs.render()
+    for frame, env in zip(frames, loop):
+        np.testing.assert_array_equal(frame, env.render())
+    assert frames[0].shape == (48, 64, 3) and frames[0].std() > 0
     envs.close()
     for env in loop:
         env.close()
