@@ -17,7 +17,15 @@ os.environ.setdefault("MUJOCO_GL", "egl")
 SCREEN = (1024, 768)
 
 
+@pytest.hookimpl(tryfirst=True)
 def pytest_collection_modifyitems(config, items):
+    # Under pytest-xdist with `--dist loadgroup` (.ci/run), one worker runs every MuJoCo Warp
+    # test, so Warp's kernels compile once, not once per worker; the other tests spread.
+    # (pytest 9.2 keeps node ids where xdist 3.8 cannot add the group: pyproject's [test]
+    # extra holds pytest below it.)
+    for item in items:
+        if "warp" in item.keywords:
+            item.add_marker(pytest.mark.xdist_group("warp"))
     # The checked-in patch table is proven on one MuJoCo release; on another it does not
     # apply (a proof cached by `python -m manipulation.patch_proof` may), so what it promises is
     # not there to check.
