@@ -218,7 +218,7 @@ class BatchEnvironment:
             hooks.after_compile(host, np.random.RandomState(0))
         episode_model = variations.EpisodeModel(hooks, host, root)
         varied = {} if array_initializer else variations.measure(hooks, host, episode_model)
-        wp = _warp.load(device)[0]
+        wp = _warp.load(device).warp
         device = _warp.default_device() if device is None else device
         self._arrays = arrays.ArrayBridge(wp, wp.get_device(device), array_type, namespace)
         per_world = variations.per_world_fields(varied, device_model_fields(), host.model.ptr)

@@ -45,7 +45,7 @@ def device_model_fields() -> dict[str, bool]:
     Returns:
       Field name (as in `mujoco.MjModel`) -> True for a field `put_model` can batch.
     """
-    mjw = _warp.load()[1]
+    mjw = _warp.load().mujoco_warp
     return {f.name: _spec_shape(f.type)[:1] == ("*",) for f in dataclasses.fields(mjw.Model)}
 
 
@@ -107,7 +107,8 @@ class BatchPhysics:
         nconmax: int | None = None,
         njmax: int | None = None,
     ):
-        warp, mjw = _warp.load()
+        modules = _warp.load()
+        warp, mjw = modules.warp, modules.mujoco_warp
         self._wp = warp
         self._mjw = mjw
         self.host = host
@@ -377,7 +378,7 @@ def _per_world_arrays(wp, data) -> list:
 def _copy_worlds_launch(keep, source, target):
     """A recorded launch that copies the worlds where `keep` is true from `source` to
     `target` (same shapes), by whole 4-byte words where a world's row allows it."""
-    wp = _warp.load()[0]
+    wp = _warp.load().warp
     nworld = source.shape[0]
     word = wp.int32 if (source.capacity // nworld) % 4 == 0 else wp.uint8
     return wp.launch(

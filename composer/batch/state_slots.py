@@ -82,7 +82,7 @@ class StateSlots:
         slots_per_world: int = 3,
         refill_interval: int = 8,
     ):
-        wp = _warp.load()[0]
+        wp = _warp.load().warp
         self._wp = wp
         self._physics = physics
         self._producer = producer
