@@ -316,7 +316,7 @@ class BatchEnvironment:
 
     def synchronize(self) -> None:
         """Waits until every launch on the batch's device has finished."""
-        self._physics._wp.synchronize_device(self._physics.device)
+        _warp.load().warp.synchronize_device(self._physics.device)
 
     @property
     def cameras(self):

@@ -92,6 +92,7 @@ class BatchPhysics:
 
     Attributes:
       xp: the array namespace of every read (NumPy on Warp's CPU device, torch on CUDA).
+      state_size: the length of one world's state in `set_state` (`mjSTATE_INTEGRATION`).
 
     Raises:
       ValueError: for a field in `batched_model_fields` that MuJoCo Warp does not batch.
@@ -346,6 +347,21 @@ class BatchPhysics:
         zero velocities, time 0), on the device; derived quantities wait for `forward`."""
         with self._wp.ScopedDevice(self.device):
             self._mjw.reset_data(self.warp_model, self.warp_data, reset=self.warp_mask(mask))
+
+    def set_state(self, states, mask) -> None:
+        """Sets the physics state of the worlds of `mask` from `states`, on the device.
+
+        Args:
+          states: a float32 Warp array (num_envs, `state_size`): each world's
+            `mjSTATE_INTEGRATION` state, as `mujoco.mj_getState` writes it; the rows of
+            other worlds are not read.
+          mask: a bool (num_envs,) mask (of the namespace, NumPy, or Warp): the worlds to set.
+            Derived quantities wait for `forward`.
+        """
+        with self._wp.ScopedDevice(self.device):
+            self._mjw.set_state(
+                self.warp_model, self.warp_data, states, _STATE_SPEC, self.warp_mask(mask)
+            )
 
     def warp_mask(self, mask):
         """A bool (num_envs,) mask (of the namespace, NumPy, or Warp) as a Warp array."""
