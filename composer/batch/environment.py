@@ -17,7 +17,7 @@ from composer.batch.initial_states import StateMaker, StateProducer
 from composer.batch.observables import BatchObservables
 from composer.batch.physics import BatchPhysics, device_model_fields
 from composer.batch.state_slots import InitialStateStats, StateSlots
-from composer.batch.task import BatchTask, for_task, has_array_initializer
+from composer.batch.task import BatchTask, InitialStateSource, for_task
 from composer.batch.time_limit import NO_LIMIT, control_step_limit
 from composer.hooks import EnvironmentHooks
 from composer.utils import argument_checks
@@ -118,7 +118,7 @@ class _HostModel(NamedTuple):
       episode_model: the `variations.EpisodeModel` that patches an episode's MJCF changes
         into `physics`' model.
       varied: model field -> what varies it per world (`variations.measure`); empty for
-        array-code initial states, where no CPU episode hook runs.
+        `InitialStateSource.ARRAY_CODE`, where no CPU episode hook runs.
     """
 
     physics: mjcf.Physics
@@ -264,7 +264,7 @@ class BatchEnvironment:
     def _refuse_what_a_batch_cannot_run(self, hooks: EnvironmentHooks) -> None:
         """Raises NotImplementedError, naming the hook, for CPU hooks a batch cannot run
         (see `composer.batch.refusals`)."""
-        if has_array_initializer(self._batch_task):
+        if self._batch_task.initial_state_source is InitialStateSource.ARRAY_CODE:
             refusals.refuse_mjcf_variations(self._batch_task)
         refusals.refuse_unbatched_hooks(hooks, self._batch_task)
 
@@ -282,7 +282,7 @@ class BatchEnvironment:
         with physics.reset_context():
             hooks.after_compile(physics, np.random.RandomState(0))
         episode_model = variations.EpisodeModel(hooks, physics, root)
-        from_cpu_task = not has_array_initializer(self._batch_task)
+        from_cpu_task = self._batch_task.initial_state_source is InitialStateSource.CPU_TASK
         varied = variations.measure(hooks, physics, episode_model) if from_cpu_task else {}
         return _HostModel(physics, episode_model, varied)
 
@@ -363,9 +363,9 @@ class BatchEnvironment:
         refill_interval: int,
     ) -> StateSlots | None:
         """The `StateSlots` that producers running the CPU task's initializers fill, and
-        from which worlds start their episodes; None for array-code initial states,
+        from which worlds start their episodes; None for `InitialStateSource.ARRAY_CODE`,
         where `BatchTask.initialize_episode` sets the initial states instead."""
-        if has_array_initializer(self._batch_task):
+        if self._batch_task.initial_state_source is InitialStateSource.ARRAY_CODE:
             return None
         maker = StateMaker(
             self._batch_task,
