@@ -62,7 +62,7 @@ def _renderer_rates(task: str, num_envs: int, device: str, frames: int) -> tuple
     cpu_env.reset()
     host = cpu_env.physics
     camera = cpu_env.task.observables[CAMERA]
-    wp = _warp.load()[0]
+    wp = _warp.load().warp
     bridge = arrays.ArrayBridge(wp, wp.get_device(device), "numpy")
     physics = BatchPhysics(host, num_envs, arrays=bridge)
     cameras = BatchCameras({CAMERA: camera}, physics)
@@ -94,7 +94,7 @@ def _batch_steps(task: str, num_envs: int, device: str, steps: int) -> float:
     def run():
         for _ in range(steps):
             env.step(action)
-        _warp.load()[0].synchronize_device(env.physics.device)
+        _warp.load().warp.synchronize_device(env.physics.device)
 
     try:
         return _median_rate(run, steps * num_envs)

@@ -8,7 +8,7 @@ from composer.batch.bindings import BatchBinding
 from composer.batch.environment import BatchEnvironment, BatchTimeStep
 from composer.batch.observables import BatchObservables, batch_reader
 from composer.batch.physics import BatchPhysics
-from composer.batch.task import BatchTask, for_task, register
+from composer.batch.task import BatchTask, InitialStateSource, for_task, register
 
 __all__ = [
     "BatchBinding",
@@ -17,6 +17,7 @@ __all__ = [
     "BatchPhysics",
     "BatchTask",
     "BatchTimeStep",
+    "InitialStateSource",
     "batch_reader",
     "for_task",
     "register",

@@ -15,6 +15,7 @@ import os
 import sys
 import tempfile
 from types import ModuleType
+from typing import NamedTuple
 
 #: The environment variable naming the directory for Warp's compiled kernels. Unset, Warp
 #: keeps its own default (a per-user cache directory).
@@ -22,14 +23,27 @@ KERNEL_CACHE_ENV = "COMPOSER_WARP_KERNEL_CACHE"
 
 _INSTALL_HINT = "composer.batch needs MuJoCo Warp: pip install 'mujoco-composer[warp]'"
 
-_modules: tuple[ModuleType, ModuleType] | None = None
+
+class WarpModules(NamedTuple):
+    """The two modules a batch runs on, as `load` returns them.
+
+    Attributes:
+      warp: the `warp` module (NVIDIA Warp), initialised: arrays, kernels, launches.
+      mujoco_warp: the `mujoco_warp` module: `put_model`, `put_data`, `step`, `forward`.
+    """
+
+    warp: ModuleType
+    mujoco_warp: ModuleType
+
+
+_modules: WarpModules | None = None
 
 # The line Warp's native start-up prints where no CUDA driver loads.
 _NO_DRIVER_WARNING = "Could not find or load the NVIDIA CUDA driver"
 
 
-def load(device: str | None = None) -> tuple[ModuleType, ModuleType]:
-    """Returns `(warp, mujoco_warp)`, imported and initialised once.
+def load(device: str | None = None) -> WarpModules:
+    """Returns the `warp` and `mujoco_warp` modules, imported and initialised once.
 
     Args:
       device: the Warp device the caller will use, if it knows: unless it names a CUDA
@@ -37,8 +51,8 @@ def load(device: str | None = None) -> tuple[ModuleType, ModuleType]:
         docstring). Only the first call's initialises Warp.
 
     Returns:
-      The `warp` module (logging warnings only, its kernel cache in
-      `$COMPOSER_WARP_KERNEL_CACHE` when that is set) and the `mujoco_warp` module.
+      `WarpModules`: `warp` (logging warnings only, its kernel cache in
+      `$COMPOSER_WARP_KERNEL_CACHE` when that is set) and `mujoco_warp`.
 
     Raises:
       ImportError: when `mujoco_warp` or `warp` is not installed; the message says how to
@@ -60,7 +74,7 @@ def load(device: str | None = None) -> tuple[ModuleType, ModuleType]:
             warp.init()
         else:
             _init_without_driver_warning(warp)
-        _modules = (warp, mujoco_warp)
+        _modules = WarpModules(warp=warp, mujoco_warp=mujoco_warp)
     return _modules
 
 
@@ -105,7 +119,7 @@ def default_device() -> str:
     """
     import warnings
 
-    warp = load()[0]
+    warp = load().warp
     if warp.get_cuda_device_count() > 0:
         return "cuda:0"
     warnings.warn(

@@ -39,7 +39,7 @@ def check_action(
     library = array_library(action)
     if not library:
         return arrays.asarray(_check_host_action(action, expected), np.float32)
-    wp = _warp.load()[0]
+    wp = _warp.load().warp
     try:
         if library == "torch":
             array = wp.from_torch(action)

@@ -85,7 +85,8 @@ class BatchCameras:
     """
 
     def __init__(self, observables: Mapping[str, MJCFCamera], physics):
-        wp, mjw = _warp.load()
+        modules = _warp.load()
+        wp, mjw = modules.warp, modules.mujoco_warp
         self._wp, self._mjw, self._physics = wp, mjw, physics
         sizes: dict[int, tuple[str, int, int]] = {}
         images = []

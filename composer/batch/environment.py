@@ -17,7 +17,7 @@ from composer.batch.initial_states import StateMaker, StateProducer
 from composer.batch.observables import BatchObservables
 from composer.batch.physics import BatchPhysics, device_model_fields
 from composer.batch.state_slots import InitialStateStats, StateSlots
-from composer.batch.task import BatchTask, for_task, has_array_initializer
+from composer.batch.task import BatchTask, InitialStateSource, for_task
 from composer.batch.time_limit import NO_LIMIT, control_step_limit
 from composer.hooks import EnvironmentHooks
 from composer.utils import argument_checks
@@ -81,6 +81,49 @@ class EpisodeEnds(NamedTuple):
 
     terminated: Any
     truncated: Any
+
+
+def _check_arguments(
+    *, array_type: str, autoreset_mode: str, device, time_limit, **counts: int
+) -> None:
+    """Raises ValueError naming the first bad one of `BatchEnvironment`'s plain arguments
+    (`counts`: arguments that must be integers >= 1)."""
+    arrays.check_array_type(array_type)
+    if autoreset_mode not in AUTORESET_MODES:
+        raise ValueError(
+            f"autoreset_mode: expected one of {list(AUTORESET_MODES)}, got {autoreset_mode!r}"
+        )
+    if device is not None and not isinstance(device, str):
+        raise ValueError(
+            f"device: expected a Warp device name such as 'cpu' or 'cuda:0', got {device!r}"
+        )
+    if not isinstance(time_limit, numbers.Real) or math.isnan(time_limit) or time_limit < 0:
+        raise ValueError(f"time_limit: expected a number of seconds >= 0, got {time_limit!r}")
+    for name, value in counts.items():
+        argument_checks.integer(**{name: value})
+
+
+def _array_bridge(device: str | None, array_type: str, namespace: str | None) -> arrays.ArrayBridge:
+    """The `ArrayBridge` of the batch's Warp device (None: `_warp.default_device()`)."""
+    wp = _warp.load(device).warp
+    device = _warp.default_device() if device is None else device
+    return arrays.ArrayBridge(wp, wp.get_device(device), array_type, namespace)
+
+
+class _HostModel(NamedTuple):
+    """The task's model compiled on the host, and what its episodes vary.
+
+    Attributes:
+      physics: the host `mjcf.Physics`, on which the `after_compile` hooks have run.
+      episode_model: the `variations.EpisodeModel` that patches an episode's MJCF changes
+        into `physics`' model.
+      varied: model field -> what varies it per world (`variations.measure`); empty for
+        `InitialStateSource.ARRAY_CODE`, where no CPU episode hook runs.
+    """
+
+    physics: mjcf.Physics
+    episode_model: variations.EpisodeModel
+    varied: dict[str, str]
 
 
 def _random_states(num_envs: int, random_state, random_states) -> list[np.random.RandomState]:
@@ -182,103 +225,178 @@ class BatchEnvironment:
         namespace: str | None = None,
     ):
         self.num_envs = argument_checks.integer(num_envs=num_envs)
-        arrays.check_array_type(array_type)
-        if autoreset_mode not in AUTORESET_MODES:
-            raise ValueError(
-                f"autoreset_mode: expected one of {list(AUTORESET_MODES)}, got {autoreset_mode!r}"
-            )
-        if device is not None and not isinstance(device, str):
-            raise ValueError(
-                f"device: expected a Warp device name such as 'cpu' or 'cuda:0', got {device!r}"
-            )
-        if not isinstance(time_limit, numbers.Real) or math.isnan(time_limit) or time_limit < 0:
-            raise ValueError(f"time_limit: expected a number of seconds >= 0, got {time_limit!r}")
-        for name, value in (
-            ("state_workers", state_workers),
-            ("slots_per_world", slots_per_world),
-            ("refill_interval", refill_interval),
-        ):
-            argument_checks.integer(**{name: value})
+        _check_arguments(
+            array_type=array_type,
+            autoreset_mode=autoreset_mode,
+            device=device,
+            time_limit=time_limit,
+            state_workers=state_workers,
+            slots_per_world=slots_per_world,
+            refill_interval=refill_interval,
+        )
         self._batch_task = for_task(task)
-        cpu_task = self._batch_task.task
-        hooks = EnvironmentHooks(cpu_task)
-        array_initializer = has_array_initializer(self._batch_task)
-        if array_initializer:
+        hooks = EnvironmentHooks(self._batch_task.task)
+        self._refuse_what_a_batch_cannot_run(hooks)
+        self._n_sub_steps = self._sub_steps_per_control_step(n_sub_steps)
+        self._random_states = _random_states(self.num_envs, random_state, random_states)
+        host = self._compile_on_host(hooks)
+        self._arrays = _array_bridge(device, array_type, namespace)
+        fields = self._per_world_fields(host, batched_model_fields)
+        self._physics = self._put_worlds_on_device(host, fields, nconmax=nconmax, njmax=njmax)
+        self._set_step_rules(host.physics, autoreset_mode, check_action_values)
+        self._observables = self._batch_observables(strip_singleton_obs_buffer_dim)
+        self._step_limit = control_step_limit(
+            float(time_limit), self._batch_task.task.physics_timestep, self._n_sub_steps
+        )
+        self._slots = self._initial_state_slots(
+            host,
+            fields,
+            state_workers=state_workers,
+            state_processes=state_processes,
+            task_factory=task_factory,
+            slots_per_world=slots_per_world,
+            refill_interval=refill_interval,
+        )
+        self._make_episode_arrays()
+
+    # The steps of __init__, in order.
+
+    def _refuse_what_a_batch_cannot_run(self, hooks: EnvironmentHooks) -> None:
+        """Raises NotImplementedError, naming the hook, for CPU hooks a batch cannot run
+        (see `composer.batch.refusals`)."""
+        if self._batch_task.initial_state_source is InitialStateSource.ARRAY_CODE:
             refusals.refuse_mjcf_variations(self._batch_task)
         refusals.refuse_unbatched_hooks(hooks, self._batch_task)
-        self._n_sub_steps = (
-            cpu_task.physics_steps_per_control_step
-            if n_sub_steps is None
-            else argument_checks.integer(n_sub_steps=n_sub_steps)
+
+    def _sub_steps_per_control_step(self, n_sub_steps: int | None) -> int:
+        """`n_sub_steps` checked, or the CPU task's when None."""
+        if n_sub_steps is None:
+            return self._batch_task.task.physics_steps_per_control_step
+        return argument_checks.integer(n_sub_steps=n_sub_steps)
+
+    def _compile_on_host(self, hooks: EnvironmentHooks) -> "_HostModel":
+        """Compiles the task's MJCF into a host `mjcf.Physics`, runs the `after_compile`
+        hooks on it once, and measures what the CPU task's episodes vary."""
+        root = self._batch_task.task.root_entity.mjcf_model
+        physics = mjcf.Physics.from_mjcf_model(root)
+        with physics.reset_context():
+            hooks.after_compile(physics, np.random.RandomState(0))
+        episode_model = variations.EpisodeModel(hooks, physics, root)
+        from_cpu_task = self._batch_task.initial_state_source is InitialStateSource.CPU_TASK
+        varied = variations.measure(hooks, physics, episode_model) if from_cpu_task else {}
+        return _HostModel(physics, episode_model, varied)
+
+    def _per_world_fields(
+        self, host: "_HostModel", batched_model_fields: Sequence[str]
+    ) -> variations.PerWorldFields:
+        """The model fields with one row per world.
+
+        Returns:
+          `device`: the task's `batched_model_fields`, the caller's, then the fields the
+          episodes vary that MuJoCo Warp batches, each once; `host`: the varied fields that
+          MuJoCo Warp does not have (see `variations.per_world_fields`).
+        """
+        varied = variations.per_world_fields(
+            host.varied, device_model_fields(), host.physics.model.ptr
         )
-        self._random_states = _random_states(self.num_envs, random_state, random_states)
-        root = cpu_task.root_entity.mjcf_model
-        host = mjcf.Physics.from_mjcf_model(root)
-        with host.reset_context():
-            hooks.after_compile(host, np.random.RandomState(0))
-        episode_model = variations.EpisodeModel(hooks, host, root)
-        varied = {} if array_initializer else variations.measure(hooks, host, episode_model)
-        wp = _warp.load(device)[0]
-        device = _warp.default_device() if device is None else device
-        self._arrays = arrays.ArrayBridge(wp, wp.get_device(device), array_type, namespace)
-        per_world = variations.per_world_fields(varied, device_model_fields(), host.model.ptr)
-        fields = tuple(
-            dict.fromkeys(
-                (*self._batch_task.batched_model_fields, *batched_model_fields, *per_world.device)
-            )
-        )
-        self._physics = BatchPhysics(
-            host,
+        device = (*self._batch_task.batched_model_fields, *batched_model_fields, *varied.device)
+        return variations.PerWorldFields(device=tuple(dict.fromkeys(device)), host=varied.host)
+
+    def _put_worlds_on_device(
+        self,
+        host: "_HostModel",
+        fields: variations.PerWorldFields,
+        *,
+        nconmax: int | None,
+        njmax: int | None,
+    ) -> BatchPhysics:
+        """The `BatchPhysics` of `num_envs` worlds of the host model, on which the
+        `BatchTask`'s `after_compile` has run."""
+        physics = BatchPhysics(
+            host.physics,
             self.num_envs,
             arrays=self._arrays,
-            batched_model_fields=fields,
+            batched_model_fields=fields.device,
             nconmax=nconmax,
             njmax=njmax,
         )
-        self._batch_task.after_compile(self._physics)
+        self._batch_task.after_compile(physics)
+        return physics
+
+    def _set_step_rules(
+        self, host_physics: mjcf.Physics, autoreset_mode: str, check_action_values: bool | None
+    ) -> None:
+        """Sets what `step` follows: the autoreset mode, the action spec and whether action
+        values are checked, and which of the task's hooks it calls (BatchTask's own discount,
+        1, and termination, never, need no arrays of their own)."""
         self.autoreset_mode = autoreset_mode
         self._same_step = autoreset_mode == "same_step"
         self._check_action_values = (
             not self._physics.is_cuda if check_action_values is None else check_action_values
         )
-        self._action_spec = cpu_task.action_spec(host)
+        self._action_spec = self._batch_task.task.action_spec(host_physics)
         self._action_shape = (self.num_envs, *self._action_spec.shape)
-        self._observables = BatchObservables(
-            cpu_task.observables,
+        task_type = type(self._batch_task)
+        self._default_discount = task_type.get_discount is BatchTask.get_discount
+        self._default_termination = (
+            task_type.should_terminate_episode is BatchTask.should_terminate_episode
+        )
+
+    def _batch_observables(self, strip_singleton_obs_buffer_dim: bool) -> BatchObservables:
+        """The batched readers of the CPU task's observables."""
+        return BatchObservables(
+            self._batch_task.task.observables,
             self._physics,
             strip_singleton_obs_buffer_dim,
             self._batch_task.observable_readers(self._physics),
         )
-        self._step_limit = control_step_limit(
-            float(time_limit), cpu_task.physics_timestep, self._n_sub_steps
+
+    def _initial_state_slots(
+        self,
+        host: "_HostModel",
+        fields: variations.PerWorldFields,
+        *,
+        state_workers: int,
+        state_processes: bool,
+        task_factory: Callable[[], composer.Task] | None,
+        slots_per_world: int,
+        refill_interval: int,
+    ) -> StateSlots | None:
+        """The `StateSlots` that producers running the CPU task's initializers fill, and
+        from which worlds start their episodes; None for `InitialStateSource.ARRAY_CODE`,
+        where `BatchTask.initialize_episode` sets the initial states instead."""
+        if self._batch_task.initial_state_source is InitialStateSource.ARRAY_CODE:
+            return None
+        maker = StateMaker(
+            self._batch_task,
+            host.physics,
+            fields.device,
+            host_fields=fields.host,
+            episode_model=host.episode_model,
         )
-        self._slots = None
-        if not array_initializer:
-            maker = StateMaker(
-                self._batch_task,
-                host,
-                fields,
-                host_fields=per_world.host,
-                episode_model=episode_model,
-            )
-            producer = StateProducer(
-                maker,
-                workers=state_workers,
-                processes=state_processes,
-                task_factory=task_factory,
-                batch_task_type=type(self._batch_task),
-                model_fields=fields,
-                host_fields=per_world.host,
-            )
-            self._slots = StateSlots(
-                self._physics,
-                producer,
-                self._random_states,
-                model_fields=fields,
-                slots_per_world=slots_per_world,
-                refill_interval=refill_interval,
-            )
-            self._batch_task.episode_values = self._slots.values
+        producer = StateProducer(
+            maker,
+            workers=state_workers,
+            processes=state_processes,
+            task_factory=task_factory,
+            batch_task_type=type(self._batch_task),
+            model_fields=fields.device,
+            host_fields=fields.host,
+        )
+        slots = StateSlots(
+            self._physics,
+            producer,
+            self._random_states,
+            model_fields=fields.device,
+            slots_per_world=slots_per_world,
+            refill_interval=refill_interval,
+        )
+        self._batch_task.episode_values = slots.values
+        return slots
+
+    def _make_episode_arrays(self) -> None:
+        """Makes what `step` keeps per world on the device (step counts, episode ends,
+        discounts) and the constants it selects from; no episode has started yet."""
         xp, n = self._physics.xp, self.num_envs
         self._mask, self._mask_view = self._arrays.empty((n,), bool)
         self._steps = self._arrays.asarray(np.zeros(n, np.int32))
@@ -292,11 +410,6 @@ class BatchEnvironment:
         self._final_observation: dict[str, Any] = {}
         self._started = False
         self._clock = clocks.STOPPED
-        task_type = type(self._batch_task)
-        self._default_discount = task_type.get_discount is BatchTask.get_discount
-        self._default_termination = (
-            task_type.should_terminate_episode is BatchTask.should_terminate_episode
-        )
 
     @property
     def step_clock(self) -> clocks.StepClock | None:
@@ -316,7 +429,7 @@ class BatchEnvironment:
 
     def synchronize(self) -> None:
         """Waits until every launch on the batch's device has finished."""
-        self._physics._wp.synchronize_device(self._physics.device)
+        _warp.load().warp.synchronize_device(self._physics.device)
 
     @property
     def cameras(self):

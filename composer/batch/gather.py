@@ -65,7 +65,7 @@ class FieldGather:
         self.ops = np.vectorize(OPS.__getitem__, otypes=[np.int32])(names).reshape(-1)
         scalar = getattr(field.device_array.dtype, "_wp_scalar_type_", field.device_array.dtype)
         #: Whether `ObservationGather` can read it (a float32 field on the device).
-        self.gatherable = scalar is _warp.load()[0].float32
+        self.gatherable = scalar is _warp.load().warp.float32
         flat = self.entries[:, 0]
         plain = (
             self.entries.shape[1] == 1 and not self.ops.any() and bool(np.all(self.weights == 1.0))
@@ -154,7 +154,7 @@ class ObservationGather:
     CHUNK_BYTES = 1 << 22
 
     def __init__(self, physics, readers: dict[str, FieldGather]):
-        wp = _warp.load()[0]
+        wp = _warp.load().warp
         self._wp = wp
         self._physics = physics
         n = physics.num_envs

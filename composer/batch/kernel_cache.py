@@ -60,7 +60,7 @@ def recorded_launches() -> Iterator[dict[tuple[int, int], tuple[Any, int]]]:
       A dict filled as kernels launch: (id of the module, CUDA block size) -> (the
       `warp` module object, the block size a CUDA launch would use).
     """
-    wp = _warp.load()[0]
+    wp = _warp.load().warp
     launched: dict[tuple[int, int], tuple[Any, int]] = {}
     launch, launch_tiled = wp.launch, wp.launch_tiled
 
@@ -105,7 +105,7 @@ def build_cuda_cache(
       ValueError: for an environment that is not on Warp's CPU device, or an `arch` Warp's
         NVRTC cannot compile for (the message lists those it can).
     """
-    wp = _warp.load()[0]
+    wp = _warp.load().warp
     supported = sorted(wp._src.context.runtime.nvrtc_supported_archs)
     if arch not in supported:
         raise ValueError(f"arch: expected one of NVRTC's architectures {supported}, got {arch}")

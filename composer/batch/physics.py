@@ -45,7 +45,7 @@ def device_model_fields() -> dict[str, bool]:
     Returns:
       Field name (as in `mujoco.MjModel`) -> True for a field `put_model` can batch.
     """
-    mjw = _warp.load()[1]
+    mjw = _warp.load().mujoco_warp
     return {f.name: _spec_shape(f.type)[:1] == ("*",) for f in dataclasses.fields(mjw.Model)}
 
 
@@ -92,6 +92,7 @@ class BatchPhysics:
 
     Attributes:
       xp: the array namespace of every read (NumPy on Warp's CPU device, torch on CUDA).
+      state_size: the length of one world's state in `set_state` (`mjSTATE_INTEGRATION`).
 
     Raises:
       ValueError: for a field in `batched_model_fields` that MuJoCo Warp does not batch.
@@ -107,7 +108,8 @@ class BatchPhysics:
         nconmax: int | None = None,
         njmax: int | None = None,
     ):
-        warp, mjw = _warp.load()
+        modules = _warp.load()
+        warp, mjw = modules.warp, modules.mujoco_warp
         self._wp = warp
         self._mjw = mjw
         self.host = host
@@ -346,6 +348,21 @@ class BatchPhysics:
         with self._wp.ScopedDevice(self.device):
             self._mjw.reset_data(self.warp_model, self.warp_data, reset=self.warp_mask(mask))
 
+    def set_state(self, states, mask) -> None:
+        """Sets the physics state of the worlds of `mask` from `states`, on the device.
+
+        Args:
+          states: a float32 Warp array (num_envs, `state_size`): each world's
+            `mjSTATE_INTEGRATION` state, as `mujoco.mj_getState` writes it; the rows of
+            other worlds are not read.
+          mask: a bool (num_envs,) mask (of the namespace, NumPy, or Warp): the worlds to set.
+            Derived quantities wait for `forward`.
+        """
+        with self._wp.ScopedDevice(self.device):
+            self._mjw.set_state(
+                self.warp_model, self.warp_data, states, _STATE_SPEC, self.warp_mask(mask)
+            )
+
     def warp_mask(self, mask):
         """A bool (num_envs,) mask (of the namespace, NumPy, or Warp) as a Warp array."""
         wp = self._wp
@@ -377,7 +394,7 @@ def _per_world_arrays(wp, data) -> list:
 def _copy_worlds_launch(keep, source, target):
     """A recorded launch that copies the worlds where `keep` is true from `source` to
     `target` (same shapes), by whole 4-byte words where a world's row allows it."""
-    wp = _warp.load()[0]
+    wp = _warp.load().warp
     nworld = source.shape[0]
     word = wp.int32 if (source.capacity // nworld) % 4 == 0 else wp.uint8
     return wp.launch(

@@ -2,7 +2,7 @@
 
 Every world has `slots_per_world` slots on the device; its episode e starts from slot
 e % slots_per_world. A reset of the worlds of a mask is a few kernel launches on the
-device: copy each chosen world's slot into its state (`mujoco_warp.set_state` with the mask),
+device: copy each chosen world's slot into its state (`BatchPhysics.set_state` with the mask),
 its batched model rows and its episode values, and count the episode. The host never learns
 which worlds reset at that step.
 
@@ -25,15 +25,12 @@ import warnings
 from collections.abc import Sequence
 from typing import NamedTuple
 
-import mujoco
 import numpy as np
 
 from composer.batch import _warp, kernels
 from composer.batch.initial_states import Job, JobResult, StateProducer
 
 __all__ = ["InitialStateStats", "StateSlots"]
-
-_STATE_SPEC = int(mujoco.mjtState.mjSTATE_INTEGRATION)
 
 #: How long a refill waits for the producers before it gives up (seconds).
 PRODUCER_TIMEOUT = 600.0
@@ -82,7 +79,7 @@ class StateSlots:
         slots_per_world: int = 3,
         refill_interval: int = 8,
     ):
-        wp = _warp.load()[0]
+        wp = _warp.load().warp
         self._wp = wp
         self._physics = physics
         self._producer = producer
@@ -175,10 +172,7 @@ class StateSlots:
             )
 
         launch(self._slot_states[0], self._chosen)
-        with wp.ScopedDevice(physics.device):
-            physics._mjw.set_state(
-                physics.warp_model, physics.warp_data, self._chosen, _STATE_SPEC, mask
-            )
+        physics.set_state(self._chosen, mask)
         for name, target in self._row_targets.items():
             launch(self._slot_rows[name][0], target)
         for name, target in self._value_targets.items():

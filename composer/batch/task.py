@@ -7,20 +7,26 @@ see `composer.batch.arrays`), written once against the Python array API standard
 reward, discount and termination of every world, and the controls an action sets. Such code
 runs where the worlds are, without a copy to the host.
 
-Initial states come one of two ways:
-- **From the CPU task (the default).** The CPU task's own `initialize_episode` hooks (task
-  and entities) run for each world on host physics, off the caller's thread, with that
-  world's random generator (`composer.batch.initial_states`); a reset applies the prepared
-  state to the worlds being reset on the device. The distribution is the CPU task's by
+Initial states come one of two ways, named by `InitialStateSource` and read from
+`BatchTask.initial_state_source`:
+- **`CPU_TASK` (the default).** The CPU task's own `initialize_episode` hooks (task and
+  entities) run for each world on host physics, off the caller's thread, with that world's
+  random generator (`composer.batch.initial_states`); a reset applies the prepared state
+  to the worlds being reset on the device. The distribution is the CPU task's by
   construction. What the hooks draw besides the physics state (a desired order, a target
   id) reaches the batched hooks through `episode_values`.
-- **As array code.** A subclass that overrides `initialize_episode(physics, mask)` sets the
+- **`ARRAY_CODE`.** A subclass that overrides `initialize_episode(physics, mask)` sets the
   state of the worlds of `mask` itself, on the device; no CPU initializer runs.
+
+The source follows from the class (an override of `initialize_episode` is array code), so
+that the two can never disagree: a flag set apart from the method could name array code
+with no method to run, or a method that would never be called.
 
 `register(task_type, batch_task_type)` says which `BatchTask` batches a task class;
 `for_task(task)` looks it up along the task's class hierarchy.
 """
 
+import enum
 from collections.abc import Callable
 from typing import Any
 
@@ -28,9 +34,19 @@ import numpy as np
 
 import composer
 
-__all__ = ["BatchTask", "for_task", "register"]
+__all__ = ["BatchTask", "InitialStateSource", "for_task", "register"]
 
 _REGISTRY: dict[type, type["BatchTask"]] = {}
+
+
+class InitialStateSource(enum.Enum):
+    """Where a `BatchTask`'s worlds get the initial state of each episode (see the module
+    docstring)."""
+
+    #: The CPU task's initializers, run on host physics by the initial-state producers.
+    CPU_TASK = "cpu_task"
+    #: The `BatchTask`'s own `initialize_episode(physics, mask)`, array code on the device.
+    ARRAY_CODE = "array_code"
 
 
 class BatchTask:
@@ -39,6 +55,9 @@ class BatchTask:
     Every hook gets the `BatchPhysics` of all worlds and returns arrays of its namespace
     `physics.xp` with a leading num_envs axis; none may copy to the host (no `float()`,
     `.item()`, `bool()` or NumPy conversion of a device array).
+
+    Initial states come from the CPU task's initializers unless the subclass overrides
+    `initialize_episode`; `initial_state_source` says which.
 
     Attributes:
       batched_model_fields: MjModel fields the task's initializers write per world (for
@@ -58,6 +77,18 @@ class BatchTask:
         self.task = task
         self.episode_values: dict[str, Any] = {}
 
+    @property
+    def initial_state_source(self) -> InitialStateSource:
+        """Where this task's worlds get their initial states: `ARRAY_CODE` when its class
+        overrides `initialize_episode`, else `CPU_TASK`.
+
+        Returns:
+          An `InitialStateSource`.
+        """
+        if type(self).initialize_episode is BatchTask.initialize_episode:
+            return InitialStateSource.CPU_TASK
+        return InitialStateSource.ARRAY_CODE
+
     def after_compile(self, physics) -> None:
         """Runs once the worlds exist on the device (nothing by default): bind here."""
 
@@ -76,15 +107,12 @@ class BatchTask:
     def initialize_episode(self, physics, mask) -> None:
         """Sets the initial state of the worlds of `mask`, bool (num_envs,), on the device.
 
-        Override only to draw initial states with array code; the default (this method not
-        overridden) starts each world from a state its CPU task's initializers prepared.
-        The environment first resets those worlds to the model's initial state
-        (`mj_resetData`: qpos0, zero velocities, time 0), and runs forward on them after.
+        Called only for `InitialStateSource.ARRAY_CODE`, which overriding this method
+        chooses: the environment first resets those worlds to the model's initial state
+        (`mj_resetData`: qpos0, zero velocities, time 0), calls this, and runs forward on
+        them after. Not overridden, the method is never called: each world starts from a
+        state its CPU task's initializers prepared (`InitialStateSource.CPU_TASK`).
         """
-        raise NotImplementedError(
-            f"{type(self).__name__}.initialize_episode: the default initial states are "
-            "applied by the environment; override this method to set them as array code"
-        )
 
     def observable_readers(self, physics) -> dict[str, Callable[[], Any]]:
         """Batched readers for the task's observables that have no generic one, by key.
@@ -112,11 +140,6 @@ class BatchTask:
         """Returns which worlds' episodes end after this step, bool (num_envs,) (none)."""
         xp = physics.xp
         return xp.zeros(physics.num_envs, dtype=xp.bool, device=physics.arrays.xp_device)
-
-
-def has_array_initializer(batch_task: BatchTask) -> bool:
-    """Whether `batch_task` sets initial states with array code."""
-    return type(batch_task).initialize_episode is not BatchTask.initialize_episode
 
 
 def register(task_type: type, batch_task_type: type[BatchTask]) -> None:

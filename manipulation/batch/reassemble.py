@@ -2,12 +2,12 @@
 
 from composer import batch
 from composer.utils import rewards
-from manipulation.batch.tower import TowerTask
+from manipulation.batch.brick_tower import BatchBrickTowerTask
 from manipulation.tasks import task_constants as tc
 from manipulation.tasks.reassemble import Reassemble
 
 
-class BatchReassemble(TowerTask):
+class BatchReassemble(BatchBrickTowerTask):
     """`Reassemble` for every world: the fraction of the desired tower's pairs whose upper
     brick sits on the lower one (each 1 within `SEAT_TOLERANCE`, Gaussian, 0.1 at
     `REASSEMBLE_MARGIN` beyond it)."""

@@ -3,13 +3,13 @@
 import mjcf
 from composer import batch
 from composer.utils import rewards
-from manipulation.batch.tower import TowerTask
+from manipulation.batch.brick_tower import BatchBrickTowerTask
 from manipulation.tasks import base
 from manipulation.tasks import task_constants as tc
 from manipulation.tasks.stack import Stack
 
 
-class BatchStack(TowerTask):
+class BatchStack(BatchBrickTowerTask):
     """`Stack` for every world: the mean over the desired tower's pairs of how well the
     upper brick sits on the lower one (1 within `SEAT_TOLERANCE`, Gaussian, 0.1 at
     `PLACE_MARGIN` beyond it), times `HELD_FACTOR` while the hand touches any brick.

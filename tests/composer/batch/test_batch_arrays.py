@@ -9,7 +9,7 @@ pytestmark = pytest.mark.warp
 def _bridge(namespace: str):
     from composer.batch import _warp, arrays
 
-    wp, _ = _warp.load()
+    wp = _warp.load().warp
     return arrays.ArrayBridge(wp, wp.get_device("cpu"), "numpy", namespace=namespace)
 
 

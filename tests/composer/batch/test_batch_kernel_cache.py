@@ -23,7 +23,7 @@ def test_recorded_launches_use_cudas_block_size():
     from composer.batch import _warp
     from composer.batch.kernel_cache import recorded_launches
 
-    wp = _warp.load()[0]
+    wp = _warp.load().warp
 
     @wp.kernel(module="unique")
     def add_one(values: wp.array(dtype=wp.float32)):

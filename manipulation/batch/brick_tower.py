@@ -1,5 +1,6 @@
-"""What the batched stack and reassemble tasks share: each world's desired tower of bricks,
-its 'desired_order' observable and the seat errors of its consecutive pairs."""
+"""`BrickTowerTask` batched: what the batched stack and reassemble tasks share, each world's
+desired tower of bricks, its 'desired_order' observable and the seat errors of its
+consecutive pairs."""
 
 import numpy as np
 
@@ -9,9 +10,9 @@ from manipulation.batch.seating import SeatErrors
 _ORDER = "desired_order"
 
 
-class TowerTask(batch.BatchTask):
-    """The batched hooks of a CPU task with `bricks` and a per-episode `desired_order`
-    (`Stack`, `Reassemble`); subclasses implement `get_reward` from `seat_errors`.
+class BatchBrickTowerTask(batch.BatchTask):
+    """The batched hooks of a `BrickTowerTask` (`Stack`, `Reassemble`): its `bricks` and
+    per-episode `desired_order`; subclasses implement `get_reward` from `seat_errors`.
 
     The desired order is an episode value (`BatchTask.initial_values`), so each world's
     reward follows the tower its own episode asks for, whether the CPU task draws it every
