@@ -1,7 +1,19 @@
 """The Warp kernels of `composer.batch`, defined on first use (importing this needs no Warp).
 
 Every kernel works on arrays whose first axis is the world, most of them on two-dimensional
-views of MuJoCo Warp's per-world arrays made by `rows`.
+views of MuJoCo Warp's per-world arrays made by `rows`. The same kernels run on Warp's CPU
+device (compiled C loops, one call per thread) and on CUDA. Each owner's kernels are
+defined by a function of their own below, named for the owner:
+
+| definer            | kernels                                   | launched by                |
+|--------------------|-------------------------------------------|----------------------------|
+| `_state_copies`    | save_columns, restore_columns, copy_worlds| `composer.batch.physics`   |
+| `_action_checks`   | count_nonfinite                           | `composer.batch.actions`   |
+| `_contacts`        | contact_worlds                            | `physics.ContactWatch`     |
+| `_episode_starts`  | take_slots, count_episodes                | `composer.batch.state_slots` |
+| `_static_poses`    | static_geom_poses                         | `composer.batch.physics`   |
+| `_gather`          | gather_columns                            | `composer.batch.gather`    |
+| `_images`          | unpack_rgb, planar_depth, segmentation    | `composer.batch.cameras`   |
 """
 
 from types import SimpleNamespace
@@ -20,14 +32,21 @@ def kernels() -> SimpleNamespace:
     """The kernels, compiled by Warp at their first launch.
 
     Returns:
-      A namespace with `save_columns`, `restore_columns`, `copy_worlds`, `count_nonfinite`,
-      `contact_worlds`, `take_slots`, `count_episodes`, `static_geom_poses`,
-      `gather_columns` (the observations, `composer.batch.observables`), and the
-      camera images' `unpack_rgb`, `planar_depth` and `segmentation` (documented on each).
+      A namespace of every kernel of the module docstring's table (documented on each).
     """
     global _kernels
     if _kernels is None:
-        _kernels = _define(_warp.load()[0])
+        wp = _warp.load().warp
+        definers = (
+            _state_copies,
+            _action_checks,
+            _contacts,
+            _episode_starts,
+            _static_poses,
+            _gather,
+            _images,
+        )
+        _kernels = SimpleNamespace(**{k: v for define in definers for k, v in define(wp).items()})
     return _kernels
 
 
@@ -37,15 +56,18 @@ def rows(array, dtype, nrows: int):
     `nrows` is the number of worlds the array holds (1 for a model field shared by every
     world); the memory is the array's own.
     """
-    wp = _warp.load()[0]
+    wp = _warp.load().warp
     per_row = array.capacity // nrows // wp.types.type_size_in_bytes(dtype)
     return wp.array(
         ptr=array.ptr, dtype=dtype, shape=(nrows, per_row), device=array.device, copy=False
     )
 
 
-def _define(wp) -> SimpleNamespace:
-    float32_max = wp.constant(wp.float64(np.finfo(np.float32).max))
+# Each definer returns its kernels by name.
+
+
+def _state_copies(wp) -> dict[str, Any]:
+    """Copies of per-world state: columns saved and restored, worlds' rows copied."""
 
     @wp.kernel(module="unique")
     def save_columns(
@@ -80,6 +102,17 @@ def _define(wp) -> SimpleNamespace:
             for k in range(source.shape[1]):
                 target[world, k] = source[world, k]
 
+    return {
+        "save_columns": save_columns,
+        "restore_columns": restore_columns,
+        "copy_worlds": copy_worlds,
+    }
+
+
+def _action_checks(wp) -> dict[str, Any]:
+    """The check of device actions' values."""
+    float32_max = wp.constant(wp.float64(np.finfo(np.float32).max))
+
     @wp.kernel(module="unique")
     def count_nonfinite(values: wp.array2d(dtype=Any), count: wp.array(dtype=wp.int32)):
         """Adds the number of entries of `values` that are NaN, infinite, or beyond float32's
@@ -89,26 +122,40 @@ def _define(wp) -> SimpleNamespace:
         if not wp.isfinite(value) or wp.abs(value) > float32_max:
             wp.atomic_add(count, 0, 1)
 
+    return {"count_nonfinite": count_nonfinite}
+
+
+def _contacts(wp) -> dict[str, Any]:
+    """Which worlds have a contact between two sets of geoms."""
+
     @wp.kernel(module="unique")
     def contact_worlds(
         nacon: wp.array(dtype=wp.int32),
         geom: wp.array(dtype=wp.vec2i),
         worldid: wp.array(dtype=wp.int32),
         codes: wp.array(dtype=wp.int32),
+        stride: int,
         out: wp.array(dtype=wp.bool),
     ):
         """out[world] = True where an active contact pairs a code-1 geom with a code-2 one.
 
-        A geom's code has bit 1 for the first set and bit 2 for the second.
+        A geom's code has bit 1 for the first set and bit 2 for the second. Thread t reads
+        the active contacts t, t + stride, ...: launched with `stride` threads, one per
+        contact slot on CUDA, or one thread for them all on the CPU device, where a thread
+        per slot of the (mostly empty) contact capacity would cost a call each.
         """
-        k = wp.tid()
-        if k >= nacon[0]:
-            return
-        pair = geom[k]
-        a = codes[pair[0]]
-        b = codes[pair[1]]
-        if ((a & 1) != 0 and (b & 2) != 0) or ((a & 2) != 0 and (b & 1) != 0):
-            out[worldid[k]] = True
+        for k in range(wp.tid(), nacon[0], stride):
+            pair = geom[k]
+            a = codes[pair[0]]
+            b = codes[pair[1]]
+            if ((a & 1) != 0 and (b & 2) != 0) or ((a & 2) != 0 and (b & 1) != 0):
+                out[worldid[k]] = True
+
+    return {"contact_worlds": contact_worlds}
+
+
+def _episode_starts(wp) -> dict[str, Any]:
+    """The prepared initial states taken into the worlds that start an episode."""
 
     @wp.kernel(module="unique")
     def take_slots(
@@ -142,6 +189,12 @@ def _define(wp) -> SimpleNamespace:
             if counters[0, world] >= uploaded[world]:
                 counters[1, world] = counters[1, world] + 1
             counters[0, world] = counters[0, world] + 1
+
+    return {"take_slots": take_slots, "count_episodes": count_episodes}
+
+
+def _static_poses(wp) -> dict[str, Any]:
+    """The world poses of geoms welded to the world, which MuJoCo Warp does not update."""
 
     @wp.func
     def mul_quat(a: wp.quat, b: wp.quat):
@@ -191,6 +244,12 @@ def _define(wp) -> SimpleNamespace:
         rotation = mul_quat(xq, geom_quat[world % geom_quat.shape[0], geom])
         geom_xmat[world, geom] = quat_to_mat(rotation)
 
+    return {"static_geom_poses": static_geom_poses}
+
+
+def _gather(wp) -> dict[str, Any]:
+    """The observation gather of `composer.batch.gather`."""
+
     @wp.kernel(module="unique")
     def gather_columns(
         sources: wp.array(dtype=wp.uint64),
@@ -227,6 +286,12 @@ def _define(wp) -> SimpleNamespace:
             elif op == 2:
                 value = wp.cos(value)
             out[slot, column_out[c, 0] + world * column_out[c, 1]] = value
+
+    return {"gather_columns": gather_columns}
+
+
+def _images(wp) -> dict[str, Any]:
+    """MuJoCo Warp's rendered pixels unpacked into camera images."""
 
     @wp.kernel(module="unique")
     def unpack_rgb(
@@ -276,17 +341,4 @@ def _define(wp) -> SimpleNamespace:
         image[world, y, x, 0] = value[0]
         image[world, y, x, 1] = value[1]
 
-    return SimpleNamespace(
-        save_columns=save_columns,
-        restore_columns=restore_columns,
-        copy_worlds=copy_worlds,
-        count_nonfinite=count_nonfinite,
-        contact_worlds=contact_worlds,
-        take_slots=take_slots,
-        count_episodes=count_episodes,
-        static_geom_poses=static_geom_poses,
-        gather_columns=gather_columns,
-        unpack_rgb=unpack_rgb,
-        planar_depth=planar_depth,
-        segmentation=segmentation,
-    )
+    return {"unpack_rgb": unpack_rgb, "planar_depth": planar_depth, "segmentation": segmentation}

@@ -54,26 +54,31 @@ class ContactWatch:
 
     Made by `BatchPhysics.contact_watch`; calling it returns a bool (num_envs,) array of the
     batch's namespace, from the contacts of the last collision pass (the contacts C MuJoCo
-    lists in `data.contact`).
+    lists in `data.contact`). The array is the watch's own, rewritten by every call.
+
+    Attributes:
+      worlds: that array as a Warp array, for a task's own kernels.
     """
 
     def __init__(self, physics: "BatchPhysics", codes: np.ndarray):
         wp = physics._wp
-        self._physics = physics
         self._codes = wp.array(codes.astype(np.int32), dtype=wp.int32, device=physics.device)
-        self._out, self._view = physics.arrays.empty((physics.num_envs,), bool)
+        self.worlds, self._view = physics.arrays.empty((physics.num_envs,), bool)
+        contact = physics.warp_data.contact
+        # One thread per contact slot on CUDA; on the CPU device one thread reads them all.
+        threads = contact.worldid.shape[0] if physics.is_cuda else 1
+        self._launch = wp.launch(
+            kernels.kernels().contact_worlds,
+            dim=threads,
+            inputs=[physics.warp_data.nacon, contact.geom, contact.worldid, self._codes, threads],
+            outputs=[self.worlds],
+            device=physics.device,
+            record_cmd=True,
+        )
 
     def __call__(self) -> Any:
-        physics = self._physics
-        contact = physics.warp_data.contact
-        self._out.zero_()
-        physics._wp.launch(
-            kernels.kernels().contact_worlds,
-            dim=contact.worldid.shape[0],
-            inputs=[physics.warp_data.nacon, contact.geom, contact.worldid, self._codes],
-            outputs=[self._out],
-            device=physics.device,
-        )
+        self.worlds.zero_()
+        self._launch.launch()
         return self._view
 
 

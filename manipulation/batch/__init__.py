@@ -6,8 +6,9 @@ camera MuJoCo Warp renders for every world (`composer.batch.cameras`). Each task
 family registers its `composer.batch.BatchTask` in a module of its own (`reach`, `lift`,
 `place`, `stack`, `reassemble`); `arm_observables` registers the batched readers of the arm's
 observables, `seating` and `brick_tower` hold what the place, stack and reassemble tasks
-share. Rewards, observations and initial states are those of the CPU tasks: the initial states
-come from the CPU task's own initializers (`composer.batch.InitialStateSource.CPU_TASK`), the
+share, `reward_kernels` the rewards written as Warp kernels (lift's). Rewards, observations
+and initial states are those of the CPU tasks: the initial states come from the CPU task's own
+initializers (`composer.batch.InitialStateSource.CPU_TASK`), the
 rewards are the same formulas on arrays. Needs the extra `[warp]` to build an environment;
 importing this package does not import Warp.
 """

@@ -63,12 +63,14 @@ def test_a_step_clock_must_be_a_step_clock():
     env.close()
 
 
-def test_steps_copy_to_the_host_only_the_refills_counter_read():
+# Lift's reward is a kernel after a contact watch; reach's is array code.
+@pytest.mark.parametrize("name", [NAME, "lift_brick_features"])
+def test_steps_copy_to_the_host_only_the_refills_counter_read(name):
     torch = pytest.importorskip("torch", reason="torch is optional: pip install torch==2.13.0")
     # Task code on torch tensors on Warp's CPU device: the code path CUDA runs, where every
     # copy to the host would synchronise. Episodes of 0.2 s (5 steps) start within the run.
     env = manipulation_batch.load(
-        NAME,
+        name,
         NUM_ENVS,
         device="cpu",
         seed=0,
