@@ -94,8 +94,10 @@ def patch_model(
 
     Returns:
       True when the model now equals a fresh compile (the physics' data is left to the
-      caller to reset: `mj_setConst` uses it as scratch space); False, having changed
-      nothing, when some change cannot be patched (see the module docstring).
+      caller to reset: `mj_setConst` uses it as scratch space; the physics is marked dirty
+      unless every change is a colour or material, as after a binding's write); False,
+      having changed nothing, when some change cannot be patched (see the module
+      docstring).
     """
     if proven is None:
         table = patch_table.current()
@@ -146,7 +148,9 @@ def patch_model(
                 model_statistics.compiled_statistics(model, physics.data.ptr),
                 keep=set(physics.mjcf_model.statistic._attributes),
             )
-        physics.mark_as_dirty()
+        # As a binding's write: a colour or material is not an input `mj_forward` reads.
+        if set_const or sized_geoms or not physics.changes_are_forward_neutral(changes):
+            physics.mark_as_dirty()
     return True
 
 
