@@ -17,7 +17,8 @@ class SpringdamperScan(NamedTuple):
 
 @dataclasses.dataclass
 class SizePatchCache:
-    """What `mjcf.geom_size_patch` looked up in one compiled model, for its later patches.
+    """What `mjcf.geom_size_patch` (and `mjcf.model_patch`, the ids of the elements it
+    writes) looked up in one compiled model, for its later patches.
 
     Valid for the structure of the compiled model it was filled from (the ids and bodies
     of its elements), which attribute patches never change: `mjcf.Physics` holds one per
@@ -29,9 +30,12 @@ class SizePatchCache:
         cannot be patched.
       springdamper: the last look at the MJCF model's joints, None before the first.
       copies: the bodies' geoms and settings -> their `BodyCopies`.
+      object_ids: element whose attribute `mjcf.model_patch` wrote -> its compiled id,
+        None where it has none.
     """
 
     geom_ids: dict = dataclasses.field(default_factory=dict)
     bodies: dict = dataclasses.field(default_factory=dict)
     springdamper: SpringdamperScan | None = None
     copies: dict = dataclasses.field(default_factory=dict)
+    object_ids: dict = dataclasses.field(default_factory=dict)

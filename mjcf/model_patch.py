@@ -87,7 +87,7 @@ def patch_model(
       physics: an `mjcf.Physics` compiled from the model that `changes` come from, whose
         model is the compile of that model as it was before `changes`.
       changes: (element, XML attribute name) pairs, as `attribute_changes_since` gives them.
-      cache: what earlier size patches of `physics`'s compiled model looked up (see
+      cache: what earlier patches of `physics`'s compiled model looked up (see
         `mjcf.geom_size_cache`); None looks everything up afresh.
       proven: (tag, attribute) -> whether `mj_setConst` must follow, in place of the
         table that applies (for the proof, which decides what a table holds).
@@ -104,6 +104,8 @@ def patch_model(
         if table is None:
             return False
         proven = table.proven
+    if cache is None:
+        cache = SizePatchCache()
     writes = []
     sized_geoms = {}
     set_const = False
@@ -123,14 +125,12 @@ def patch_model(
             if pair == _GEOM_SIZE:
                 sized_geoms[id(target)] = target
                 continue
-            write = _write_for(physics, target, xml_name)
+            write = _write_for(physics, target, xml_name, cache)
             if write is None:
                 return False
             writes.append(write)
     if sized_geoms:
-        size_writes = geom_size_patch.size_writes(
-            physics, list(sized_geoms.values()), SizePatchCache() if cache is None else cache
-        )
+        size_writes = geom_size_patch.size_writes(physics, list(sized_geoms.values()), cache)
         if size_writes is None:
             return False
         writes.extend(size_writes)
@@ -188,8 +188,9 @@ def _elements_using(template, xml_name: str) -> list:
     ]
 
 
-def _write_for(physics, element, xml_name: str) -> _Write | None:
-    """The field write that gives `element`'s compiled value of `xml_name`, or None."""
+def _write_for(physics, element, xml_name: str, cache: SizePatchCache) -> _Write | None:
+    """The field write that gives `element`'s compiled value of `xml_name`, or None; the
+    element's compiled id is looked up once per compiled model (`cache.object_ids`)."""
     source = traversal_utils.default_value_source(element, xml_name)
     if source is None:
         return None
@@ -199,9 +200,14 @@ def _write_for(physics, element, xml_name: str) -> _Write | None:
     if ref is None or ref.struct != MODEL:
         return None
     layout = physics.field_layout
-    try:
-        object_id = binding.object_id(layout, physics.mjcf_model, element)
-    except ValueError:
+    if element not in cache.object_ids:
+        try:
+            object_id = binding.object_id(layout, physics.mjcf_model, element)
+        except ValueError:
+            object_id = None
+        cache.object_ids[element] = object_id
+    object_id = cache.object_ids[element]
+    if object_id is None:
         return None
     array = getattr(physics.model.ptr, ref.name)
     index = layout.single_index(ref.addressing, object_id)
