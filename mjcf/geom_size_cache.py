@@ -5,7 +5,7 @@ from __future__ import annotations
 import dataclasses
 from typing import NamedTuple
 
-__all__ = ["SizePatchCache", "SpringdamperScan"]
+__all__ = ["ElementsUsing", "SizePatchCache", "SpringdamperScan"]
 
 
 class SpringdamperScan(NamedTuple):
@@ -13,6 +13,13 @@ class SpringdamperScan(NamedTuple):
 
     modification_count: int
     found: bool
+
+
+class ElementsUsing(NamedTuple):
+    """The elements that take a default template's attribute, at a modification count."""
+
+    modification_count: int
+    elements: list
 
 
 @dataclasses.dataclass
@@ -32,6 +39,7 @@ class SizePatchCache:
       copies: the bodies' geoms and settings -> their `BodyCopies`.
       object_ids: element whose attribute `mjcf.model_patch` wrote -> its compiled id,
         None where it has none.
+      elements_using: (default template, XML attribute) -> the `ElementsUsing` it.
     """
 
     geom_ids: dict = dataclasses.field(default_factory=dict)
@@ -39,3 +47,4 @@ class SizePatchCache:
     springdamper: SpringdamperScan | None = None
     copies: dict = dataclasses.field(default_factory=dict)
     object_ids: dict = dataclasses.field(default_factory=dict)
+    elements_using: dict = dataclasses.field(default_factory=dict)

@@ -47,7 +47,7 @@ from mjcf import (
     traversal_utils,
 )
 from mjcf.element import Element
-from mjcf.geom_size_cache import SizePatchCache
+from mjcf.geom_size_cache import ElementsUsing, SizePatchCache
 from mujoco_physics.field_layout import MODEL
 
 __all__ = ["patch_supported", "patch_model"]
@@ -71,6 +71,8 @@ _ORIENTATIONS = tuple(
 # segment (`fromto`) gives a geom's or site's pose in their place.
 _POSE = ("pos", "quat")
 _SEGMENT = "fromto"
+# The attributes that decide which default classes an element takes.
+_CLASS_ATTRIBUTES = ("class", "childclass")
 
 
 def patch_supported() -> bool:
@@ -111,7 +113,7 @@ def patch_model(
     set_const = False
     for element, xml_name in changes:
         if traversal_utils.is_default_template(element):
-            targets = _elements_using(element, xml_name)
+            targets = _elements_using(element, xml_name, cache)
         else:
             targets = (element,)
         for target in targets:
@@ -173,19 +175,31 @@ def _write_derived_spring_lengths(physics) -> None:
         model.tendon_lengthspring[index] = model.tendon_length0[index]
 
 
-def _elements_using(template, xml_name: str) -> list:
+def _elements_using(template, xml_name: str, cache: SizePatchCache) -> list:
     """Elements of `template`'s tag that have attribute `xml_name`, in its model, whose
-    default classes include the template's class."""
+    default classes include the template's class.
+
+    Kept in `cache.elements_using` with the model's `modification_count`, and found again
+    only when the model's structure, or an attribute naming classes, changed since.
+    """
+    root = template._root
+    cached = cache.elements_using.get((template, xml_name))
+    if cached is not None:
+        changes = root.attribute_changes_since(cached.modification_count)
+        if changes is not None and not any(name in _CLASS_ATTRIBUTES for _, name in changes):
+            return cached.elements
     tag = template._spec.name
     dclass = template._parent
-    return [
+    elements = [
         element
-        for element in template._root._iter_own_tree()
+        for element in root._iter_own_tree()
         if element._spec.name == tag
         and xml_name in element._spec.attributes
         and not traversal_utils.is_default_template(element)
         and dclass in traversal_utils.default_classes(element)
     ]
+    cache.elements_using[template, xml_name] = ElementsUsing(root.modification_count, elements)
+    return elements
 
 
 def _write_for(physics, element, xml_name: str, cache: SizePatchCache) -> _Write | None:
