@@ -539,24 +539,19 @@ class Updater:
         corruptor, spec) differ from the last one's, since the specs may then differ.
         """
         last = self._last_reset
+        options = self._options()
         if (
             last is None
             or physics is not last.physics
             or _simulation_data(physics) is not last.data
             or random_state is not last.random_state
-            or self._options() != last.options
+            or options != last.options
         ):
             self.reset(physics, random_state)
             return
-        enabled = [
-            (name, observable)
-            for d in (self._observables if self._is_nested else [self._observables])
-            for name, observable in d.items()
-            if observable.enabled
-        ]
         calls = []
         with physics.suppress_physics_errors():
-            for name, observable in enabled:
+            for name, observable, *_ in options:
                 sample = observable.observation_callable(physics, random_state)
                 _, draw_delay = _EnabledObservable._bind_option(
                     observable.delay, DEFAULT_DELAY, random_state
@@ -570,13 +565,13 @@ class Updater:
             sample()
 
     def _options(self) -> list:
-        """Each observable's name, identity and options: with the physics and the random
-        state, what the structure `reset` builds depends on, besides sampled shapes."""
+        """The name, identity and options of each enabled observable, in order: with the
+        physics and the random state, what the structure `reset` builds depends on, besides
+        sampled shapes."""
         return [
             (
                 name,
                 observable,
-                observable.enabled,
                 observable.update_interval,
                 observable.delay,
                 observable.buffer_size,
@@ -586,6 +581,7 @@ class Updater:
             )
             for d in (self._observables if self._is_nested else [self._observables])
             for name, observable in d.items()
+            if observable.enabled
         ]
 
     @staticmethod

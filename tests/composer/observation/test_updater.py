@@ -801,3 +801,14 @@ def test_reset_draws_after_an_option_change_resets_the_specs_too():
     obs.buffer_size = 3
     obs_updater.reset_draws(clock, random_state)
     assert obs_updater.observation_spec()["x"].shape == (3, 2)
+
+
+def test_reset_draws_after_an_observable_is_enabled_resets_the_specs_too():
+    later = observable.Generic(lambda physics: float(physics.time))
+    obs_updater = updater.Updater({"x": _vector(), "later": later}, 1)
+    clock, random_state = _Clock(), np.random.RandomState(0)
+    obs_updater.reset(clock, random_state)
+    assert list(obs_updater.observation_spec()) == ["x"]
+    later.enabled = True
+    obs_updater.reset_draws(clock, random_state)
+    assert list(obs_updater.observation_spec()) == ["x", "later"]
