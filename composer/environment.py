@@ -332,7 +332,9 @@ class Environment(dm_env.Environment):
         all the same as last time: as in dm_control, which builds a new updater at every
         recompile, an observable added between episodes is observed from the next reset.
         Either way the updater is then reset, as dm_control resets its new one (the reset
-        draws from the random state, which the seed guarantee counts on).
+        draws from the random state, which the seed guarantee counts on): with
+        `Updater.reset_draws`, which makes the reset's calls into the observables but keeps
+        the buffers of the last reset while nothing they depend on changed.
         """
         outcome = self._compiled_model.update(self._task.root_entity.mjcf_model)
         if outcome is ModelUpdate.NEW_PHYSICS:
@@ -353,8 +355,10 @@ class Environment(dm_env.Environment):
             self._rebuild_observation_updater(observables)
         self._collected_observables = collected
         # dm_control resets the updater it builds at every compile; the reset may draw
-        # from the random state, so it happens here too, for the same draws in order.
-        self._observation_updater.reset(self._physics_proxy, self._random_state)
+        # from the random state, so its calls into the observables happen here too, for the
+        # same draws in order. The episode's reset follows before anything reads the
+        # buffers, so what the last reset built is kept where that is exact.
+        self._observation_updater.reset_draws(self._physics_proxy, self._random_state)
         out = self._observation_out
         if out is not None and self._observation_updater.output_problem(out) is not None:
             self._observation_out = None  # the observation spec changed: new arrays again

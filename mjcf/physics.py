@@ -161,7 +161,7 @@ class Physics(engine.Physics):
           data is then to be reset, as after a compile. False, having changed nothing, when
           a change is not one that `mjcf.patching.model_patch` can write (then recompile).
 
-        What size patches look up in the compiled model is kept for the next call, until
+        What patches look up in the compiled model is kept for the next call, until
         this Physics loads another model (`mjcf.patching.geom_size_cache`).
         """
         return model_patch.patch_model(self, changes, cache=self._size_patch_cache)

@@ -35,6 +35,15 @@ class _DueEntry(NamedTuple):
     name: str
 
 
+class _ResetInputs(NamedTuple):
+    """What the last `Updater.reset` was given, and the observables' options then."""
+
+    physics: object
+    data: object
+    random_state: object
+    options: list
+
+
 class _SubStepPlan(NamedTuple):
     """What `Updater.update` does at one sub-step where observables are due.
 
@@ -438,6 +447,7 @@ class Updater:
         self._gathers = ()
         self._direct_sampling = None
         self._physics = None
+        self._last_reset = None
         self._readers = ()
         self._plan_period = None
         self._step_counter = 0
@@ -497,6 +507,9 @@ class Updater:
                 self._direct_sampling = layout
             self._gathers = layout.apply(eligible)
         self._physics = physics
+        self._last_reset = _ResetInputs(
+            physics, _simulation_data(physics), random_state, self._options()
+        )
         self._readers = [self._reader(d) for d in dicts]
         if any(enabled.is_stochastic for enabled in self._enabled_list):
             self._plan_period = None
@@ -508,6 +521,68 @@ class Updater:
         self._reset_plan()
         for enabled in self._enabled_list:
             enabled.sample(0, enabled.next_delay())
+
+    def reset_draws(self, physics, random_state) -> None:
+        """Makes the calls into the observables that `reset(physics, random_state)` makes, in
+        its order (so the same draws from `random_state`), keeping what the last `reset` built.
+
+        For a reset that another `reset` follows before anything steps or reads an
+        observation: `composer.Environment` resets the updater after every model update, as
+        dm_control resets the one it builds at every compile, and again once the episode
+        is initialised. Each enabled observable's `observation_callable(physics,
+        random_state)` is built, called once for its shape when it has no `array_spec`, and
+        then, observable after observable, its delay is drawn (when a callable) and it is
+        called once more: the reset's calls, with the same values read. Nothing is bound or
+        buffered, so the specs stay those of the last `reset`. A full `reset` is done
+        instead when there was none yet, or the physics, the random state or any
+        observable's options (enabled, update interval, delay, buffer size, aggregator,
+        corruptor, spec) differ from the last one's, since the specs may then differ.
+        """
+        last = self._last_reset
+        options = self._options()
+        if (
+            last is None
+            or physics is not last.physics
+            or _simulation_data(physics) is not last.data
+            or random_state is not last.random_state
+            or options != last.options
+        ):
+            self.reset(physics, random_state)
+            return
+        calls = []
+        with physics.suppress_physics_errors():
+            for name, observable, *_ in options:
+                sample = observable.observation_callable(physics, random_state)
+                _, draw_delay = _EnabledObservable._bind_option(
+                    observable.delay, DEFAULT_DELAY, random_state
+                )
+                if observable.array_spec is None:
+                    np.asarray(sample())
+                calls.append((name, sample, draw_delay))
+        for name, sample, draw_delay in calls:
+            if draw_delay is not None:
+                _as_count(name, "delay", draw_delay(), 0)
+            sample()
+
+    def _options(self) -> list:
+        """The name, identity and options of each enabled observable, in order: with the
+        physics and the random state, what the structure `reset` builds depends on, besides
+        sampled shapes."""
+        return [
+            (
+                name,
+                observable,
+                observable.update_interval,
+                observable.delay,
+                observable.buffer_size,
+                observable.aggregator,
+                observable.corruptor,
+                observable.array_spec,
+            )
+            for d in (self._observables if self._is_nested else [self._observables])
+            for name, observable in d.items()
+            if observable.enabled
+        ]
 
     @staticmethod
     def _reader(enabled_dict) -> tuple:

@@ -5,7 +5,7 @@ from __future__ import annotations
 import dataclasses
 from typing import NamedTuple
 
-__all__ = ["SizePatchCache", "SpringdamperScan"]
+__all__ = ["ElementsUsing", "SizePatchCache", "SpringdamperScan"]
 
 
 class SpringdamperScan(NamedTuple):
@@ -15,9 +15,17 @@ class SpringdamperScan(NamedTuple):
     found: bool
 
 
+class ElementsUsing(NamedTuple):
+    """The elements that take a default template's attribute, at a modification count."""
+
+    modification_count: int
+    elements: list
+
+
 @dataclasses.dataclass
 class SizePatchCache:
-    """What `mjcf.patching.geom_size_patch` looked up in one compiled model, for later patches.
+    """What `mjcf.patching.geom_size_patch` (and `mjcf.patching.model_patch`, the ids of the
+    elements it writes) looked up in one compiled model, for its later patches.
 
     Valid for the structure of the compiled model it was filled from (the ids and bodies
     of its elements), which attribute patches never change: `mjcf.Physics` holds one per
@@ -29,9 +37,14 @@ class SizePatchCache:
         cannot be patched.
       springdamper: the last look at the MJCF model's joints, None before the first.
       copies: the bodies' geoms and settings -> their `BodyCopies`.
+      object_ids: element whose attribute `mjcf.patching.model_patch` wrote -> its compiled id,
+        None where it has none.
+      elements_using: (default template, XML attribute) -> the `ElementsUsing` it.
     """
 
     geom_ids: dict = dataclasses.field(default_factory=dict)
     bodies: dict = dataclasses.field(default_factory=dict)
     springdamper: SpringdamperScan | None = None
     copies: dict = dataclasses.field(default_factory=dict)
+    object_ids: dict = dataclasses.field(default_factory=dict)
+    elements_using: dict = dataclasses.field(default_factory=dict)

@@ -42,7 +42,7 @@ import numpy as np
 from mjcf import attribute_types, binding, traversal_utils
 from mjcf.element import Element
 from mjcf.patching import geom_size_patch, model_statistics, patch_table
-from mjcf.patching.geom_size_cache import SizePatchCache
+from mjcf.patching.geom_size_cache import ElementsUsing, SizePatchCache
 from mujoco_physics.field_layout import MODEL
 
 __all__ = ["patch_supported", "patch_model"]
@@ -66,6 +66,8 @@ _ORIENTATIONS = tuple(
 # segment (`fromto`) gives a geom's or site's pose in their place.
 _POSE = ("pos", "quat")
 _SEGMENT = "fromto"
+# The attributes that decide which default classes an element takes.
+_CLASS_ATTRIBUTES = ("class", "childclass")
 
 
 def patch_supported() -> bool:
@@ -82,27 +84,31 @@ def patch_model(
       physics: an `mjcf.Physics` compiled from the model that `changes` come from, whose
         model is the compile of that model as it was before `changes`.
       changes: (element, XML attribute name) pairs, as `attribute_changes_since` gives them.
-      cache: what earlier size patches of `physics`'s compiled model looked up (see
+      cache: what earlier patches of `physics`'s compiled model looked up (see
         `mjcf.patching.geom_size_cache`); None looks everything up afresh.
       proven: (tag, attribute) -> whether `mj_setConst` must follow, in place of the
         table that applies (for the proof, which decides what a table holds).
 
     Returns:
       True when the model now equals a fresh compile (the physics' data is left to the
-      caller to reset: `mj_setConst` uses it as scratch space); False, having changed
-      nothing, when some change cannot be patched (see the module docstring).
+      caller to reset: `mj_setConst` uses it as scratch space; the physics is marked dirty
+      unless every change is a colour or material, as after a binding's write); False,
+      having changed nothing, when some change cannot be patched (see the module
+      docstring).
     """
     if proven is None:
         table = patch_table.current()
         if table is None:
             return False
         proven = table.proven
+    if cache is None:
+        cache = SizePatchCache()
     writes = []
     sized_geoms = {}
     set_const = False
     for element, xml_name in changes:
         if traversal_utils.is_default_template(element):
-            targets = _elements_using(element, xml_name)
+            targets = _elements_using(element, xml_name, cache)
         else:
             targets = (element,)
         for target in targets:
@@ -116,14 +122,12 @@ def patch_model(
             if pair == _GEOM_SIZE:
                 sized_geoms[id(target)] = target
                 continue
-            write = _write_for(physics, target, xml_name)
+            write = _write_for(physics, target, xml_name, cache)
             if write is None:
                 return False
             writes.append(write)
     if sized_geoms:
-        size_writes = geom_size_patch.size_writes(
-            physics, list(sized_geoms.values()), SizePatchCache() if cache is None else cache
-        )
+        size_writes = geom_size_patch.size_writes(physics, list(sized_geoms.values()), cache)
         if size_writes is None:
             return False
         writes.extend(size_writes)
@@ -141,7 +145,9 @@ def patch_model(
                 model_statistics.compiled_statistics(model, physics.data.ptr),
                 keep=set(physics.mjcf_model.statistic._attributes),
             )
-        physics.mark_as_dirty()
+        # As a binding's write: a colour or material is not an input `mj_forward` reads.
+        if set_const or sized_geoms or not physics.changes_are_forward_neutral(changes):
+            physics.mark_as_dirty()
     return True
 
 
@@ -164,23 +170,36 @@ def _write_derived_spring_lengths(physics) -> None:
         model.tendon_lengthspring[index] = model.tendon_length0[index]
 
 
-def _elements_using(template, xml_name: str) -> list:
+def _elements_using(template, xml_name: str, cache: SizePatchCache) -> list:
     """Elements of `template`'s tag that have attribute `xml_name`, in its model, whose
-    default classes include the template's class."""
+    default classes include the template's class.
+
+    Kept in `cache.elements_using` with the model's `modification_count`, and found again
+    only when the model's structure, or an attribute naming classes, changed since.
+    """
+    root = template._root
+    cached = cache.elements_using.get((template, xml_name))
+    if cached is not None:
+        changes = root.attribute_changes_since(cached.modification_count)
+        if changes is not None and not any(name in _CLASS_ATTRIBUTES for _, name in changes):
+            return cached.elements
     tag = template._spec.name
     dclass = template._parent
-    return [
+    elements = [
         element
-        for element in template._root._iter_own_tree()
+        for element in root._iter_own_tree()
         if element._spec.name == tag
         and xml_name in element._spec.attributes
         and not traversal_utils.is_default_template(element)
         and dclass in traversal_utils.default_classes(element)
     ]
+    cache.elements_using[template, xml_name] = ElementsUsing(root.modification_count, elements)
+    return elements
 
 
-def _write_for(physics, element, xml_name: str) -> _Write | None:
-    """The field write that gives `element`'s compiled value of `xml_name`, or None."""
+def _write_for(physics, element, xml_name: str, cache: SizePatchCache) -> _Write | None:
+    """The field write that gives `element`'s compiled value of `xml_name`, or None; the
+    element's compiled id is looked up once per compiled model (`cache.object_ids`)."""
     source = traversal_utils.default_value_source(element, xml_name)
     if source is None:
         return None
@@ -190,9 +209,14 @@ def _write_for(physics, element, xml_name: str) -> _Write | None:
     if ref is None or ref.struct != MODEL:
         return None
     layout = physics.field_layout
-    try:
-        object_id = binding.object_id(layout, physics.mjcf_model, element)
-    except ValueError:
+    if element not in cache.object_ids:
+        try:
+            object_id = binding.object_id(layout, physics.mjcf_model, element)
+        except ValueError:
+            object_id = None
+        cache.object_ids[element] = object_id
+    object_id = cache.object_ids[element]
+    if object_id is None:
         return None
     array = getattr(physics.model.ptr, ref.name)
     index = layout.single_index(ref.addressing, object_id)

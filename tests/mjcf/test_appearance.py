@@ -9,6 +9,7 @@ import pytest
 import mjcf
 from mjcf import schema
 from mjcf.appearance import APPEARANCE_FIELDS, forward_neutral_fields
+from mjcf.patching import model_patch
 
 # Every kind of object that carries a colour or a material, with sensors that read contacts,
 # frames, tendons and cameras, and (with a rangefinder) ray casting.
@@ -193,3 +194,21 @@ def test_writing_rgba_in_a_model_with_a_rangefinder_updates_its_reading():
     physics.bind(geom).rgba = [0, 0, 1, 0]
     assert physics.is_dirty
     assert physics.bind(sensor).sensordata[0] == -1
+
+
+@pytest.mark.skipif(not model_patch.patch_supported(), reason="no proven patch table")
+@pytest.mark.parametrize("with_rangefinder", [False, True])
+def test_patching_rgba_leaves_the_physics_clean_as_a_binding_write(with_rangefinder):
+    root, geom = _button_scene(with_rangefinder)
+    physics = mjcf.Physics.from_mjcf_model(root)
+    physics.forward()
+    count = root.modification_count
+    geom.rgba = [1, 0, 0, 1]
+    assert physics.apply_attribute_changes(root.attribute_changes_since(count))
+    np.testing.assert_array_equal(physics.model.geom_rgba[0], [1, 0, 0, 1])
+    # A rangefinder sees colours, so there the patch needs a forward before the next read.
+    assert physics.is_dirty == with_rangefinder
+    count = root.modification_count
+    geom.friction = [0.5, 0.005, 0.0001]
+    assert physics.apply_attribute_changes(root.attribute_changes_since(count))
+    assert physics.is_dirty

@@ -741,3 +741,74 @@ def test_an_observables_array_spec_sets_the_observation_dtype():
     observations = _run({"t": obs}, 2, 1)
     assert [o["t"].dtype for o in observations] == [np.float32, np.float32]
     assert observations[-1]["t"].tolist() == [[np.float32(2.1)]]
+
+
+def _counted_observables(calls):
+    """Observables that draw at every sample (a noise corruptor, a random delay), one of them
+    without a spec, counting the calls made to their raw reads in `calls`."""
+
+    def read(name, physics):
+        calls.append(name)
+        return _value_at(physics.time)
+
+    delay_draws = _RecordedDraws(0, 3)
+    noisy = _enabled(
+        observable.Generic(
+            functools.partial(read, "noisy"),
+            corruptor=lambda v, random_state: v + random_state.normal(size=np.shape(v)),
+        )
+    )
+    delayed = _enabled(
+        observable.Generic(functools.partial(read, "delayed"), delay=delay_draws, buffer_size=2)
+    )
+    return {"noisy": noisy, "delayed": delayed}, delay_draws
+
+
+@pytest.mark.parametrize("second", ["reset", "reset_draws"])
+def test_reset_draws_then_reset_draws_and_reads_as_two_resets(second):
+    def episode(second_reset):
+        calls = []
+        observables, delay_draws = _counted_observables(calls)
+        clock, random_state = _Clock(), np.random.RandomState(3)
+        obs_updater = updater.Updater(observables, 2)
+        obs_updater.reset(clock, random_state)
+        clock.time = 5
+        getattr(obs_updater, second_reset)(clock, random_state)
+        clock.time = 7
+        obs_updater.reset(clock, random_state)
+        obs_updater.prepare_for_next_control_step()
+        for _ in range(2):
+            clock.time += 1
+            obs_updater.update()
+        return calls, delay_draws.values, random_state.randint(1 << 30), obs_updater
+
+    calls, delays, next_draw, obs_updater = episode(second)
+    reference_calls, reference_delays, reference_next, reference = episode("reset")
+    assert calls == reference_calls
+    assert delays == reference_delays and len(delays) >= 3
+    assert next_draw == reference_next
+    observation, expected = obs_updater.get_observation(), reference.get_observation()
+    for name in expected:
+        np.testing.assert_array_equal(observation[name], expected[name])
+
+
+def test_reset_draws_after_an_option_change_resets_the_specs_too():
+    obs = _vector()
+    obs_updater = updater.Updater({"x": obs}, 1)
+    clock, random_state = _Clock(), np.random.RandomState(0)
+    obs_updater.reset(clock, random_state)
+    assert obs_updater.observation_spec()["x"].shape == (1, 2)
+    obs.buffer_size = 3
+    obs_updater.reset_draws(clock, random_state)
+    assert obs_updater.observation_spec()["x"].shape == (3, 2)
+
+
+def test_reset_draws_after_an_observable_is_enabled_resets_the_specs_too():
+    later = observable.Generic(lambda physics: float(physics.time))
+    obs_updater = updater.Updater({"x": _vector(), "later": later}, 1)
+    clock, random_state = _Clock(), np.random.RandomState(0)
+    obs_updater.reset(clock, random_state)
+    assert list(obs_updater.observation_spec()) == ["x"]
+    later.enabled = True
+    obs_updater.reset_draws(clock, random_state)
+    assert list(obs_updater.observation_spec()) == ["x", "later"]

@@ -13,6 +13,7 @@ import pytest
 
 import mjcf
 from mjcf.patching import model_patch, patchable_attributes
+from mjcf.patching.compiled_model import CompiledModel, ModelUpdate
 from mjcf.patching.model_snapshot import ModelSnapshot
 
 _SCENE = """
@@ -444,3 +445,22 @@ def test_a_moving_body_in_a_model_with_springdamper_recompiles_and_a_welded_one_
     root.find("body", "wall").pos = [0.6, 0, 0.1]
     assert _patch(root, physics, count)
     _assert_everything_equals_a_recompile(root, physics)
+
+
+@pytest.mark.patch_table
+def test_a_default_class_change_reaches_an_element_that_took_the_class_since():
+    root = mjcf.from_xml_string(_SCENE)
+    compiled = CompiledModel()
+    compiled.update(root)
+    stiff = root.default.find("default", "stiff").joint
+    stiff.frictionloss = 4.0
+    assert compiled.update(root) is ModelUpdate.PATCHED
+    # A class is not patched: the recompile has the same structure and is loaded in place.
+    root.find("joint", "elbow").dclass = "stiff"
+    assert compiled.update(root) is ModelUpdate.LOADED
+    stiff.frictionloss = 5.0
+    assert compiled.update(root) is ModelUpdate.PATCHED
+    np.testing.assert_array_equal(
+        compiled.physics.named.model.dof_frictionloss[["shoulder", "elbow", "wrist"]], [5, 5, 0.7]
+    )
+    _assert_equals_a_recompile(root, compiled.physics)
