@@ -23,7 +23,8 @@ any differs. With `--mujoco4`, it also runs the project side on mujoco 4 (the ve
 `tools.dm_control_conformance`, whose dm_control is the same release) and reports the
 largest differences from the reference on 3.17, without failing: there only MuJoCo's
 numerics may differ, so the draws must still be the same (CI leaves this report out: it
-cannot fail). The sides run at the same time, each in a process of its own.
+cannot fail). The sides run at the same time, each in `SHARDS` processes that share its
+environments.
 """
 
 from __future__ import annotations
@@ -46,6 +47,8 @@ DM_CONTROL = f"dm-control=={DM_CONTROL_VERSION}"
 #: dm_control 1.0.50's own MuJoCo release: the one both sides are compared on.
 MUJOCO = "mujoco==3.17.0"
 RUNNER = ROOT / "tools" / "seed_episode_runner.py"
+#: Runners per side, each on a share of the environments (4 processes in all on CI's 2 cores).
+SHARDS = 2
 
 QPOS_TOLERANCE = 1e-8
 OBSERVATION_TOLERANCE = 1e-6
@@ -73,32 +76,54 @@ class Comparison(NamedTuple):
     reward: float
 
 
-def start_side(python: Path, side: str, seeds: int, steps: int, only: str) -> tuple:
-    """Starts the runner in `python`'s venv; returns (process, output file)."""
-    out = CACHE / f"{python.parent.parent.parent.name}-{python.parent.parent.name}.npz"
+class Side(NamedTuple):
+    """One side's runners: a process and its output file per shard."""
+
+    runners: list[tuple[subprocess.Popen, Path]]
+
+
+def start_side(
+    python: Path, side: str, seeds: int, steps: int, only: str, shards: int = SHARDS
+) -> Side:
+    """Starts `shards` runners of `side` in `python`'s venv, each on every `shards`-th
+    environment, so that the machine's cores share the work whatever each environment costs."""
     workdir = CACHE / "workdir"
     workdir.mkdir(parents=True, exist_ok=True)
     env = dict(os.environ, MUJOCO_GL=os.environ.get("MUJOCO_GL", "egl"))
-    process = subprocess.Popen(
-        [str(python), str(RUNNER), side, str(out), str(seeds), str(steps), only],
-        cwd=workdir,
-        env=env,
-        stdout=subprocess.DEVNULL,
-        stderr=subprocess.PIPE,
-        text=True,
-    )
-    return process, out
+    venv = python.parent.parent.name
+    runners = []
+    for shard in range(shards):
+        out = CACHE / f"{venv}-{side}-{shard}of{shards}.npz"
+        process = subprocess.Popen(
+            [str(python), str(RUNNER), side, str(out), str(seeds), str(steps), only]
+            + [f"{shard}/{shards}"],
+            cwd=workdir,
+            env=env,
+            stdout=subprocess.DEVNULL,
+            stderr=subprocess.PIPE,
+            text=True,
+        )
+        runners.append((process, out))
+    return Side(runners)
 
 
-def finish_side(process: subprocess.Popen, out: Path) -> Episodes:
-    """Waits for a runner and loads what it recorded."""
-    _, errors = process.communicate()
-    if process.returncode != 0:
-        raise RuntimeError(f"the episode runner failed ({out.name}):\n{errors[-3000:]}")
-    with np.load(out) as saved:
-        meta = json.loads(str(saved["__meta__"]))
-        arrays = {key: saved[key] for key in saved.files if key != "__meta__"}
-    return Episodes(arrays, meta["draws"], meta["errors"], meta["mujoco"])
+def finish_side(side: Side) -> Episodes:
+    """Waits for a side's runners and joins what they recorded."""
+    arrays: dict[str, np.ndarray] = {}
+    draws: dict[str, list] = {}
+    errors: dict[str, str] = {}
+    mujoco = ""
+    for process, out in side.runners:
+        _, stderr = process.communicate()
+        if process.returncode != 0:
+            raise RuntimeError(f"the episode runner failed ({out.name}):\n{stderr[-3000:]}")
+        with np.load(out) as saved:
+            meta = json.loads(str(saved["__meta__"]))
+            arrays.update((key, saved[key]) for key in saved.files if key != "__meta__")
+        draws.update(meta["draws"])
+        errors.update(meta["errors"])
+        mujoco = meta["mujoco"]
+    return Episodes(arrays, draws, errors, mujoco)
 
 
 def _first_draw_difference(reference: list, project: list) -> str | None:
@@ -212,14 +237,14 @@ def main() -> int:
     newest_python = dm_control_conformance.ensure_conformance_venv() if args.mujoco4 else None
     if args.install_only:
         return 0
-    # The sides run at the same time, each in a process of its own.
+    # The sides run at the same time, each in processes of its own.
     sides = [
         start_side(python, "reference", args.seeds, args.steps, args.only),
         start_side(python, "project", args.seeds, args.steps, args.only),
     ]
     if newest_python is not None:
         sides.append(start_side(newest_python, "project", args.seeds, args.steps, args.only))
-    reference, project, *newest = [finish_side(*side) for side in sides]
+    reference, project, *newest = [finish_side(side) for side in sides]
     rows = [compare(name, args.seeds, reference, project) for name in _names(reference)]
     title = (
         f"dm_control {DM_CONTROL_VERSION} on mujoco {reference.mujoco} against the project "

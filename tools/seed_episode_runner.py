@@ -1,7 +1,8 @@
 """Records seeded episode starts of dm_control's composer environments (run by
 `tools.dm_control_seeds`, inside a scratch venv; not library code).
 
-Usage: `python tools/seed_episode_runner.py (reference | project) OUT.npz SEEDS STEPS`
+Usage: `python tools/seed_episode_runner.py (reference | project) OUT.npz SEEDS STEPS
+[ONLY [SHARD/SHARDS]]`
 
 `reference` runs the installed dm_control as it is; `project` first installs this
 project's redirect, so dm_control's environments run on this project's composer, mjcf and
@@ -16,7 +17,8 @@ examples, and every seed, it seeds NumPy's and Python's global generators with t
   actions (the same for both sides, a function of the step and action index only).
 
 It writes them to `OUT.npz`: arrays under `ENV/SEED/QUANTITY`, and the draws and errors
-as JSON under `draws` and `errors`.
+as JSON under `draws` and `errors`. `ONLY` (comma-separated names, or empty for all) and
+`SHARD/SHARDS` (`1/2`: every second environment, from the second) pick the environments.
 """
 
 from __future__ import annotations
@@ -132,6 +134,7 @@ def record(name: str, make, seed: int, steps: int, arrays: dict, draws: dict) ->
 def main() -> int:
     side, out, seeds, steps = sys.argv[1], sys.argv[2], int(sys.argv[3]), int(sys.argv[4])
     only = sys.argv[5].split(",") if len(sys.argv) > 5 and sys.argv[5] else None
+    shard, shards = map(int, sys.argv[6].split("/")) if len(sys.argv) > 6 else (0, 1)
     if side == "project":
         from composer import dm_control_compat
 
@@ -139,8 +142,8 @@ def main() -> int:
     arrays: dict[str, np.ndarray] = {}
     draws: dict[str, list] = {}
     errors: dict[str, str] = {}
-    for name, make in environments():
-        if only is not None and name not in only:
+    for index, (name, make) in enumerate(environments()):
+        if (only is not None and name not in only) or index % shards != shard:
             continue
         for seed in range(seeds):
             try:
