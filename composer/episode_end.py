@@ -99,9 +99,8 @@ class Autoreset(enum.Enum):
         if isinstance(mode, cls):
             return mode
         value = getattr(mode, "value", mode)
-        for member in cls:
-            if value in (member.value, _GYMNASIUM_VALUES[member.value]):
-                return member
+        if isinstance(value, str) and value in _BY_VALUE:
+            return _BY_VALUE[value]
         raise ValueError(
             f"autoreset_mode: expected one of {[m.value for m in cls]} or a Gymnasium "
             f"AutoresetMode, got {mode!r}"
@@ -129,3 +128,10 @@ class Autoreset(enum.Enum):
         """Where an episode is over after a step that `ended` it: all but SAME_STEP's,
         whose next episode has already started."""
         return ended & (self is not Autoreset.SAME_STEP)
+
+
+# Each mode by our value and by Gymnasium's: `Autoreset.of` runs at every sub-environment step.
+_BY_VALUE = {
+    **{mode.value: mode for mode in Autoreset},
+    **{mode.gymnasium_value: mode for mode in Autoreset},
+}

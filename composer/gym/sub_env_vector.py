@@ -92,7 +92,7 @@ def reset_sub_env(env: gymnasium.Env, seed: int | None, options: dict | None) ->
 
 
 def step_sub_env(
-    env: gymnasium.Env, action, autoreset_mode: AutoresetMode, episode_over: bool
+    env: gymnasium.Env, action, autoreset_mode: Autoreset | AutoresetMode, episode_over: bool
 ) -> SubEnvOutcome:
     """Steps `env`, or resets it as `autoreset_mode` says (see `composer.episode_end`).
 
@@ -249,7 +249,7 @@ class SubEnvVectorEnv(VectorEnv):
           SubEnvironmentError: if a sub-environment raised.
         """
         self._check_open()
-        mode = self.autoreset_mode
+        mode = self._autoreset
         episode_over = self._episode_over
         if self._autoreset.refuses_step(episode_over).any():
             raise RuntimeError(

@@ -72,9 +72,16 @@ def test_autoreset_reads_gymnasiums_autoreset_mode():
     )
 
 
-def test_an_unknown_autoreset_mode_is_refused_naming_the_argument():
-    with pytest.raises(ValueError, match=r"autoreset_mode: expected one of .* got 'sometimes'"):
-        Autoreset.of("sometimes")
+@pytest.mark.parametrize(
+    "mode, shown", [("sometimes", "'sometimes'"), (["next_step"], "['next_step']")]
+)
+def test_an_unknown_autoreset_mode_is_refused_naming_the_argument(mode, shown):
+    with pytest.raises(ValueError) as raised:
+        Autoreset.of(mode)
+    assert str(raised.value) == (
+        "autoreset_mode: expected one of ['next_step', 'same_step', 'disabled'] or a "
+        f"Gymnasium AutoresetMode, got {shown}"
+    )
 
 
 @pytest.mark.parametrize(
