@@ -11,6 +11,7 @@ from dm_env import specs
 
 import composer
 import mjcf
+from composer import episode_end
 from composer.batch import _warp, actions, arrays, refusals, variations
 from composer.batch import step_clock as clocks
 from composer.batch.initial_states import StateMaker, StateProducer
@@ -19,13 +20,15 @@ from composer.batch.physics import BatchPhysics, device_model_fields
 from composer.batch.state_slots import InitialStateStats, StateSlots
 from composer.batch.task import BatchTask, InitialStateSource, for_task
 from composer.batch.time_limit import NO_LIMIT, control_step_limit
+from composer.episode_end import Autoreset
 from composer.hooks import EnvironmentHooks
 from composer.utils import argument_checks
 
-__all__ = ["AUTORESET_MODES", "BatchEnvironment", "BatchTimeStep", "EpisodeEnds"]
+__all__ = ["AUTORESET_MODES", "BatchEnvironment", "BatchTimeStep"]
 
-#: The values of `BatchEnvironment(autoreset_mode=...)`, as Gymnasium names its modes.
-AUTORESET_MODES = ("next_step", "same_step")
+#: The values of `BatchEnvironment(autoreset_mode=...)`: the `composer.episode_end`
+#: modes a batch offers.
+AUTORESET_MODES = (Autoreset.NEXT_STEP.value, Autoreset.SAME_STEP.value)
 
 _FIRST, _MID, _LAST = (
     int(t) for t in (dm_env.StepType.FIRST, dm_env.StepType.MID, dm_env.StepType.LAST)
@@ -68,19 +71,6 @@ class BatchTimeStep(NamedTuple):
 def _step_types(step_type):
     # A Warp array has no elementwise comparison; its values come to the host to compare.
     return step_type.numpy() if arrays.array_library(step_type) == "warp" else step_type
-
-
-class EpisodeEnds(NamedTuple):
-    """How the episodes that ended at the last step ended, bool (num_envs,) device arrays.
-
-    Attributes:
-      terminated: the task ended the episode (discount 0), Gymnasium's `terminated`.
-      truncated: the episode ended with a non-zero discount (the time limit), Gymnasium's
-        `truncated`.
-    """
-
-    terminated: Any
-    truncated: Any
 
 
 def _check_arguments(
@@ -153,13 +143,11 @@ class BatchEnvironment:
     launches work and copies nothing back to the host (see `composer.batch.state_slots`
     for the one read every `refill_interval` steps).
 
-    Autoreset, as Gymnasium names it:
-    - "next_step" (composer's own): a world whose episode ended is reset at the next
-      `step`, which ignores its action and returns FIRST with reward 0 and discount 1.
-    - "same_step" (rsl_rl's and mjlab's): a world whose episode ends is reset within the
-      same `step`, which returns LAST with the reward and discount of the ended episode and
-      the first observation of the next one; the last observation of the ended episode is
-      `final_observation`.
+    Autoreset follows `composer.episode_end`: under "next_step" (the default) the `step`
+    after a world's LAST resets it, ignores its action and returns FIRST with reward 0 and
+    discount 1; under "same_step" (rsl_rl's and mjlab's) the `step` that ends an episode
+    returns LAST with that episode's reward and discount and the next episode's first
+    observation, the ended episode's last observation being `final_observation`.
 
     Args:
       task: a `composer.Task` with a registered batched version, or a `BatchTask`.
@@ -330,7 +318,7 @@ class BatchEnvironment:
         values are checked, and which of the task's hooks it calls (BatchTask's own discount,
         1, and termination, never, need no arrays of their own)."""
         self.autoreset_mode = autoreset_mode
-        self._same_step = autoreset_mode == "same_step"
+        self._autoreset = Autoreset.of(autoreset_mode)
         self._check_action_values = (
             not self._physics.is_cuda if check_action_values is None else check_action_values
         )
@@ -577,15 +565,14 @@ class BatchEnvironment:
             values = self._arrays.asarray(values)
         return self._arrays.hand_out(values)
 
-    def episode_ends(self) -> EpisodeEnds:
+    def episode_ends(self) -> episode_end.EpisodeEnds:
         """How the episodes that ended at the last `step` ended, as arrays of the namespace.
 
         Returns:
-          An `EpisodeEnds`: `terminated` where the task ended an episode with discount 0,
-          `truncated` where an episode ended with a non-zero discount (a time limit).
+          A `composer.episode_end.EpisodeEnds` of bool (num_envs,) arrays: `terminated`
+          where the task ended an episode (discount 0), `truncated` where the time limit did.
         """
-        terminated = self._ended & (self._discount == 0.0)
-        return EpisodeEnds(terminated=terminated, truncated=self._ended & ~terminated)
+        return episode_end.episode_ends(self._ended, self._discount)
 
     def step(self, action) -> BatchTimeStep:
         """Steps every world by one control step; see the class docstring for autoreset.
@@ -618,8 +605,9 @@ class BatchEnvironment:
         clock.lap("task")
         physics.step(self._n_sub_steps)
         clock.lap("physics")
-        restarting = self._ended if not self._same_step else xp.zeros_like(self._ended)
-        if not self._same_step:
+        autoreset = self._autoreset
+        restarting = autoreset.resets_before_step(self._ended)
+        if autoreset is Autoreset.NEXT_STEP:
             # These worlds were stepped with the others; their reset overwrites that step.
             self._start_episodes(restarting)
             clock.lap("start_episodes")
@@ -651,7 +639,7 @@ class BatchEnvironment:
         clock.lap("counters")
         observation = self._observables.read()
         clock.lap("observations")
-        if self._same_step:
+        if autoreset is Autoreset.SAME_STEP:
             self._final_observation = observation
             self._start_episodes(ended)
             steps = xp.where(ended, 0, steps)

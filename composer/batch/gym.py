@@ -1,15 +1,9 @@
 """A `BatchEnvironment` as a `gymnasium.vector.VectorEnv` (imports gymnasium and Warp).
 
 `step` returns `(observations, rewards, terminations, truncations, infos)` for all worlds at
-once, with the batch's autoreset mode as Gymnasium names it:
-- NEXT_STEP: the step after a world's episode ended resets that world (its action is
-  ignored) and returns its first observation with reward 0.
-- SAME_STEP: the step in which a world's episode ends resets it and returns the first
-  observation of the next episode; the last observation of the ended one is in
-  `infos["final_obs"]`, for the worlds of `infos["_final_obs"]`.
-
-An episode that ends with discount 0 (the task ended it) is terminated, one that ends with a
-non-zero discount (the time limit) truncated, as in `composer.gym.GymnasiumEnv`.
+once. Terminations, truncations and the batch's autoreset mode (NEXT_STEP or SAME_STEP) are
+those of `composer.episode_end`; under SAME_STEP the last observations of the ended
+episodes are in `infos["final_obs"]`, for the worlds of `infos["_final_obs"]`.
 Observations are the batch's arrays: a dict of (num_envs, ...) float32 arrays (uint8 camera
 images), of the batch's `array_type` (NumPy, or Warp, torch or JAX arrays on its device), as
 are rewards, terminations and truncations.
@@ -22,12 +16,11 @@ from gymnasium.spaces import Dict
 from gymnasium.vector import AutoresetMode, VectorEnv
 from gymnasium.vector.utils import batch_space
 
-from composer.batch.environment import BatchEnvironment, BatchTimeStep
+from composer.batch.environment import AUTORESET_MODES, BatchEnvironment, BatchTimeStep
+from composer.episode_end import Autoreset
 from composer.gym.spec_spaces import box_from_spec
 
 __all__ = ["WarpVectorEnv", "autoreset_mode_name"]
-
-_MODES = {AutoresetMode.NEXT_STEP: "next_step", AutoresetMode.SAME_STEP: "same_step"}
 
 
 def autoreset_mode_name(mode) -> str:
@@ -36,12 +29,12 @@ def autoreset_mode_name(mode) -> str:
     Raises:
       ValueError: for DISABLED, which a batch does not offer.
     """
-    gymnasium_mode = AutoresetMode(mode)
-    if gymnasium_mode not in _MODES:
+    name = Autoreset.of(AutoresetMode(mode)).value
+    if name not in AUTORESET_MODES:
         raise ValueError(
             f"autoreset_mode: backend 'warp' offers NEXT_STEP and SAME_STEP, got {mode!r}"
         )
-    return _MODES[gymnasium_mode]
+    return name
 
 
 class WarpVectorEnv(VectorEnv):
@@ -58,11 +51,8 @@ class WarpVectorEnv(VectorEnv):
         if not isinstance(env, BatchEnvironment):
             raise TypeError(f"env: expected a composer.batch.BatchEnvironment, got {env!r}")
         self.env = env
-        self.metadata = {
-            "autoreset_mode": AutoresetMode.SAME_STEP
-            if env.autoreset_mode == "same_step"
-            else AutoresetMode.NEXT_STEP
-        }
+        self._autoreset = Autoreset.of(env.autoreset_mode)
+        self.metadata = {"autoreset_mode": AutoresetMode(self._autoreset.gymnasium_value)}
         self.num_envs = env.num_envs
         self.single_observation_space = Dict(
             {key: box_from_spec(spec) for key, spec in env.observation_spec().items()}
@@ -93,7 +83,7 @@ class WarpVectorEnv(VectorEnv):
     def step(
         self, actions
     ) -> tuple[dict[str, np.ndarray], np.ndarray, np.ndarray, np.ndarray, dict]:
-        """Steps every world (see the module docstring for autoreset).
+        """Steps every world (see `composer.episode_end` for autoreset).
 
         Returns:
           observations (dict of (num_envs, ...) arrays), rewards (num_envs,) float32,
@@ -104,7 +94,7 @@ class WarpVectorEnv(VectorEnv):
         time_step: BatchTimeStep = env.step(actions)
         ends = env.episode_ends()
         infos = {"discount": time_step.discount}
-        if env.autoreset_mode == "same_step":
+        if self._autoreset is Autoreset.SAME_STEP:
             infos["final_obs"] = env.final_observation
             infos["_final_obs"] = env.hand_out(ends.terminated | ends.truncated)
         return (

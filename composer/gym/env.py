@@ -11,9 +11,9 @@ Contract of the adapter (`GymnasiumEnv`):
   `composer.Environment` applies at its next reset) change it there, never mid-episode.
 - `reset(seed=s)` reseeds the wrapped environment's `random_state` in place, so the same
   `s` gives the same episode; `reset()` without a seed continues the random sequence.
-- `step` returns `(observation, reward, terminated, truncated, info)`: an episode that
-  ends with discount 0 (the task ended it) is *terminated*, one that ends with a
-  non-zero discount (the time limit) is *truncated*; `info['discount']` is the discount.
+- `step` returns `(observation, reward, terminated, truncated, info)`, terminated and
+  truncated as `composer.episode_end` says (discount 0: terminated; the time limit:
+  truncated); `info['discount']` is the discount.
   At an episode's end (terminated or truncated), a wrapped environment whose task defines
   success (`composer.Task.get_success` returns a bool, not None) adds `info['is_success']`,
   a bool (Stable-Baselines3's key); no other step carries it.
@@ -36,6 +36,7 @@ import dm_env
 import gymnasium
 import numpy as np
 
+from composer.episode_end import episode_ends
 from composer.gym import spec_spaces
 from composer.gym.rows import row_writer
 from composer.utils import argument_checks
@@ -243,8 +244,8 @@ class GymnasiumEnv(gymnasium.Env):
         """Applies `action` for one control step.
 
         Returns:
-          observation, reward (a float), terminated (the episode ended with discount 0),
-          truncated (it ended with a non-zero discount: the time limit), and an info dict
+          observation, reward (a float), terminated and truncated (bools, as
+          `composer.episode_end.episode_ends` says), and an info dict
           holding 'discount' and, when the episode ended and the task defines success,
           'is_success' (a bool: `task.get_success(physics)`).
 
@@ -265,8 +266,7 @@ class GymnasiumEnv(gymnasium.Env):
         terminated = truncated = False
         if timestep.last():
             self._episode_over = True
-            terminated = discount == 0
-            truncated = not terminated
+            terminated, truncated = (bool(end) for end in episode_ends(timestep.last(), discount))
             success = self._success()
             if success is not None:
                 info["is_success"] = success

@@ -14,7 +14,9 @@ import numpy as np
 from dm_env import specs
 from gymnasium import spaces
 
-__all__ = ["FlatObservations", "box_from_spec", "is_image_spec", "space_from_spec"]
+from composer.observation.flattening import flat_split
+
+__all__ = ["FlatObservations", "box_from_spec", "space_from_spec"]
 
 
 def box_from_spec(spec: specs.Array) -> spaces.Box:
@@ -51,17 +53,12 @@ def space_from_spec(spec) -> spaces.Space:
     return box_from_spec(spec)
 
 
-def is_image_spec(spec: specs.Array) -> bool:
-    """True for a camera image: (height, width, channels), possibly behind buffer axes."""
-    return np.dtype(spec.dtype) == np.uint8 and len(spec.shape) >= 3
-
-
 class FlatObservations:
     """Flattens observations of one spec: the features into one vector, images kept apart.
 
-    Features are every observation that is not a camera image (uint8 with at least 3
-    axes), concatenated in the spec's order, each flattened in C order. What an
-    observation becomes depends only on which kinds the spec has:
+    Which observations are features and which images is `composer.observation.flattening`'s
+    rule (`flat_split`, images apart). What an observation becomes depends only on which
+    kinds the spec has:
 
     | the spec has        | observation (and `space`)                               |
     |---------------------|---------------------------------------------------------|
@@ -77,16 +74,9 @@ class FlatObservations:
     """
 
     def __init__(self, observation_spec: Mapping[str, specs.Array]):
-        features, images = [], []
-        for name, spec in observation_spec.items():
-            if not isinstance(spec, specs.Array):
-                raise TypeError(
-                    f"observation {name!r}: expected an array spec to flatten, got "
-                    f"{type(spec).__name__}"
-                )
-            (images if is_image_spec(spec) else features).append(name)
-        self.features: tuple[str, ...] = tuple(features)
-        self.images: tuple[str, ...] = tuple(images)
+        split = flat_split(observation_spec)
+        self.features: tuple[str, ...] = split.features
+        self.images: tuple[str, ...] = split.images
         feature_boxes = [box_from_spec(observation_spec[name]) for name in self.features]
         self.space: spaces.Space = self._pack(
             _concatenated_box(feature_boxes) if feature_boxes else None,

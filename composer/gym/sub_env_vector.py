@@ -12,17 +12,12 @@ sub-environment that is a `GymnasiumEnv` its row (`rows.attach_row`), views of t
 arrays that it writes its observations into and returns; any other sub-environment's
 observation is copied into its row when its outcome is stored.
 
-Autoreset (https://farama.org/Vector-Autoreset-Mode), for a sub-environment whose
-episode ended (terminated or truncated) at step t:
-
-- NEXT_STEP: step t returns the episode's last observation; at step t+1 the action is
-  ignored, the sub-environment is reset, and it returns the reset observation with
-  reward 0, terminated and truncated False.
-- SAME_STEP: step t resets it at once and returns the reset observation, with step t's
-  reward, terminated and truncated; the last observation and info are in
-  `info['final_obs']` and `info['final_info']` (masks `info['_final_obs']`, ...).
-- DISABLED: nothing is reset; the caller resets it with
-  `reset(options={'reset_mask': mask})` before stepping it again.
+Autoreset follows Gymnasium's modes (https://farama.org/Vector-Autoreset-Mode) as
+`composer.episode_end` defines them: NEXT_STEP resets a sub-environment at the step after
+its episode ended, SAME_STEP within that step (its last observation and info then in
+`info['final_obs']` and `info['final_info']`, masks `info['_final_obs']`, ...), and under
+DISABLED the caller resets it with `reset(options={'reset_mask': mask})` before stepping
+it again.
 """
 
 from collections.abc import Callable, Sequence
@@ -33,6 +28,7 @@ import numpy as np
 from gymnasium.vector import AutoresetMode, VectorEnv
 from gymnasium.vector.utils import batch_space, create_empty_array, iterate
 
+from composer.episode_end import Autoreset
 from composer.gym.rows import batch_copier, copied, row_views, row_writer
 
 __all__ = [
@@ -96,17 +92,18 @@ def reset_sub_env(env: gymnasium.Env, seed: int | None, options: dict | None) ->
 
 
 def step_sub_env(
-    env: gymnasium.Env, action, autoreset_mode: AutoresetMode, episode_over: bool
+    env: gymnasium.Env, action, autoreset_mode: Autoreset | AutoresetMode, episode_over: bool
 ) -> SubEnvOutcome:
-    """Steps `env`, or resets it as `autoreset_mode` says (see the module docstring).
+    """Steps `env`, or resets it as `autoreset_mode` says (see `composer.episode_end`).
 
     Args:
       episode_over: whether the previous step ended `env`'s episode.
     """
-    if episode_over and autoreset_mode is AutoresetMode.NEXT_STEP:
+    mode = Autoreset.of(autoreset_mode)
+    if mode.resets_before_step(episode_over):
         return reset_sub_env(env, None, None)
     observation, reward, terminated, truncated, info = env.step(action)
-    if autoreset_mode is AutoresetMode.SAME_STEP and (terminated or truncated):
+    if mode.resets_after_step(terminated or truncated):
         # The reset overwrites the row that an attached sub-environment returned.
         observation = copied(observation)
         reset_observation, reset_info = env.reset()
@@ -148,7 +145,7 @@ class SubEnvVectorEnv(VectorEnv):
     Args:
       single_observation_space, single_action_space: one sub-environment's spaces.
       num_envs: the number of sub-environments.
-      autoreset_mode: an `AutoresetMode` or its value (see the module docstring).
+      autoreset_mode: an `AutoresetMode` or its value (see `composer.episode_end`).
       metadata: the sub-environments' metadata; 'autoreset_mode' is added.
       render_mode: the sub-environments' render mode.
       copy: return copies of the observation arrays rather than the arrays themselves
@@ -167,6 +164,7 @@ class SubEnvVectorEnv(VectorEnv):
         copy: bool = True,
     ):
         self.autoreset_mode = AutoresetMode(autoreset_mode)
+        self._autoreset = Autoreset.of(self.autoreset_mode)
         self.num_envs = num_envs
         self.metadata = {**(metadata or {}), "autoreset_mode": self.autoreset_mode}
         self.render_mode = render_mode
@@ -251,9 +249,9 @@ class SubEnvVectorEnv(VectorEnv):
           SubEnvironmentError: if a sub-environment raised.
         """
         self._check_open()
-        mode = self.autoreset_mode
+        mode = self._autoreset
         episode_over = self._episode_over
-        if mode is AutoresetMode.DISABLED and episode_over.any():
+        if self._autoreset.refuses_step(episode_over).any():
             raise RuntimeError(
                 f"sub-environments {np.flatnonzero(episode_over).tolist()} ended their "
                 "episodes and autoreset_mode is DISABLED: reset them with "
@@ -396,10 +394,9 @@ class SubEnvVectorEnv(VectorEnv):
         self._rewards[index] = outcome.reward
         self._terminations[index] = outcome.terminated
         self._truncations[index] = outcome.truncated
-        # A SAME_STEP autoreset has already started the next episode.
-        self._episode_over[index] = (
+        self._episode_over[index] = self._autoreset.over_after_step(
             outcome.terminated or outcome.truncated
-        ) and outcome.final_info is None
+        )
 
     def _observations_out(self):
         return self._copy_observations() if self.copy else self._observations

@@ -3,7 +3,8 @@
 rsl_rl (the PyPI package `rsl-rl-lib`, the extra `[rsl_rl]`) trains on torch tensors that
 stay on the simulation's device. `RslRlVecEnv` hands it the batch's own torch views: the
 observations, concatenated per world into the group "policy", rewards, dones and the time
-outs it bootstraps on, with no copy to the host.
+outs it bootstraps on (`composer.episode_end`'s terminated and truncated), with no copy to
+the host.
 
 ```python
 import manipulation.batch
@@ -24,6 +25,8 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
+from composer.observation import flattening
+
 try:
     import torch
     from rsl_rl.env import VecEnv
@@ -38,7 +41,7 @@ except ImportError as error:  # the extra is missing
 if TYPE_CHECKING:
     from composer.batch import BatchEnvironment
 
-#: The observation group the concatenated observations are handed out as; rsl_rl's
+#: The observation group the concatenated features are handed out as; rsl_rl's
 #: actor and critic read it unless the runner's `obs_groups` say otherwise.
 OBSERVATION_GROUP = "policy"
 
@@ -54,13 +57,24 @@ class RslRlVecEnv(VecEnv):
     [-1, 1] and mapped linearly onto the action spec's bounds (-1 to the minimum, 1 to the
     maximum) before the batch steps.
 
+    Observations: the group "policy" is float32 (num_envs, N), the features (see
+    `composer.observation.flattening`) flattened per world and concatenated in the
+    observation dict's order. Camera images are flattened into it too unless `images` says
+    "apart", which makes each image a group of its own, named by its observation, float32
+    (num_envs, *its shape), for a convolutional policy.
+
     `step` returns what rsl_rl's runner expects:
-      observations: a `TensorDict` with the group "policy": float32 (num_envs, N), every
-        observation flattened per world and concatenated in the observation dict's order.
+      observations: a `TensorDict` of the groups above.
       rewards: float32 (num_envs,).
-      dones: int64 (num_envs,): 1 where an episode ended (terminated or timed out); the
-        observation of such a world is already the next episode's first.
-      extras: {"time_outs": bool (num_envs,)}, the episodes the time limit ended.
+      dones: int64 (num_envs,): 1 where an episode ended (`composer.episode_end`'s
+        terminated or truncated); the observation of such a world is already the next
+        episode's first.
+      extras: {"time_outs": bool (num_envs,)}, the episodes truncated (by the time limit).
+
+    Args:
+      env: the batch environment to train on.
+      images: `flattening.IMAGES_FLATTENED` ("flattened", the default, as this adapter has
+        always done) or `flattening.IMAGES_APART` ("apart").
 
     Attributes:
       num_envs, num_actions, max_episode_length, device, cfg: rsl_rl's `VecEnv` contract.
@@ -69,10 +83,11 @@ class RslRlVecEnv(VecEnv):
 
     Raises:
       ValueError: when the environment hands out no torch tensors, does not autoreset in
-        the same step, or has no time limit.
+        the same step, or has no time limit; for any other `images`, or images kept
+        apart that leave no features or take the name "policy".
     """
 
-    def __init__(self, env: BatchEnvironment):
+    def __init__(self, env: BatchEnvironment, *, images: str = flattening.IMAGES_FLATTENED):
         if env.array_type != "torch":
             raise ValueError(
                 f"env: rsl_rl trains on torch tensors; expected a batch environment with "
@@ -87,6 +102,18 @@ class RslRlVecEnv(VecEnv):
             raise ValueError(
                 "env: rsl_rl needs a maximum episode length; expected a batch environment "
                 "with a finite time_limit, got none"
+            )
+        self._split = flattening.flat_split(env.observation_spec(), images=images)
+        if not self._split.features:
+            raise ValueError(
+                f"images: {images!r} leaves no features for rsl_rl's {OBSERVATION_GROUP!r} "
+                f"group (the observations are all camera images); use "
+                f"{flattening.IMAGES_FLATTENED!r}"
+            )
+        if OBSERVATION_GROUP in self._split.images:
+            raise ValueError(
+                f"images: the camera observation {OBSERVATION_GROUP!r} kept apart would take "
+                "the name of rsl_rl's feature group; rename the observable or flatten images"
             )
         self._env = env
         spec = env.action_spec()
@@ -145,8 +172,13 @@ class RslRlVecEnv(VecEnv):
         self._env.close()
 
     def _pack(self, observation: dict) -> TensorDict:
-        flat = torch.cat(
-            [value.reshape(self.num_envs, -1).to(torch.float32) for value in observation.values()],
+        features = torch.cat(
+            [
+                observation[name].reshape(self.num_envs, -1).to(torch.float32)
+                for name in self._split.features
+            ],
             dim=1,
         )
-        return TensorDict({OBSERVATION_GROUP: flat}, batch_size=[self.num_envs], device=self.device)
+        groups = {OBSERVATION_GROUP: features}
+        groups.update((name, observation[name].to(torch.float32)) for name in self._split.images)
+        return TensorDict(groups, batch_size=[self.num_envs], device=self.device)

@@ -9,10 +9,10 @@ Stable-Baselines3 and torch (the extra `[sb3]`); `import composer` does not.
 
 SB3's conventions, as `step_wait` keeps them (those of SB3's own `DummyVecEnv`):
 
-- `dones[i]` is `terminated or truncated`; a sub-environment whose episode ended was
-  reset in the same step (Gymnasium's SAME_STEP autoreset, done by the vector env on the
-  sub-environment's own thread or actor), and its row of the observations is the new
-  episode's first observation.
+- `dones[i]` is `terminated or truncated` (as `composer.episode_end` maps a dm_env
+  episode's end); a sub-environment whose episode ended was reset in the same step
+  (SAME_STEP autoreset, done by the vector env on the sub-environment's own thread or
+  actor), and its row of the observations is the new episode's first observation.
 - For that sub-environment, `infos[i]` is the info of the episode's last step (with
   whatever the environment puts there at an episode's end, such as `is_success` or
   Gymnasium's `RecordEpisodeStatistics` 'episode', which SB3's callbacks and loggers

@@ -68,23 +68,6 @@ def test_reset_without_a_seed_continues_the_random_sequence():
     assert not np.array_equal(first["duplo2x4/position"], second["duplo2x4/position"])
 
 
-def test_time_limit_end_is_truncated_not_terminated():
-    env = GymnasiumEnv(slider_environment(time_limit=0.06))
-    env.reset(seed=0)
-    results = [env.step(np.zeros(1)) for _ in range(3)]
-    assert [(r[2], r[3]) for r in results] == [(False, False), (False, False), (False, True)]
-    assert results[-1][4]["discount"] == 1.0
-
-
-def test_task_termination_with_discount_zero_is_terminated():
-    env = GymnasiumEnv(slider_environment(end_after_steps=2))
-    env.reset(seed=0)
-    results = [env.step(np.zeros(1)) for _ in range(2)]
-    assert [(r[2], r[3]) for r in results] == [(False, False), (True, False)]
-    assert results[-1][1] == 1.0
-    assert results[-1][4]["discount"] == 0.0
-
-
 class VectorRewardTask(SliderTask):
     """Returns its reward as an array of shape (1,), which composer.Environment passes on."""
 

@@ -18,16 +18,17 @@ TIME_LIMIT = 0.2
 STEPS = 5
 
 
+_OPTIONS = dict(
+    seed=3,
+    device="cpu",
+    array_type="torch",
+    autoreset_mode="same_step",
+    time_limit=TIME_LIMIT,
+)
+
+
 def _batch(**kwargs):
-    options = dict(
-        seed=3,
-        device="cpu",
-        array_type="torch",
-        autoreset_mode="same_step",
-        time_limit=TIME_LIMIT,
-    )
-    options.update(kwargs)
-    return manipulation.batch.load("reach_site_features", WORLDS, **options)
+    return manipulation.batch.load("reach_site_features", WORLDS, **{**_OPTIONS, **kwargs})
 
 
 @pytest.fixture(scope="module")
@@ -122,3 +123,44 @@ def test_rsl_rl_ppo_trains_an_iteration_on_it():
     after = list(runner.alg.actor.parameters())
     assert any(not torch.equal(a, b) for a, b in zip(before, after))
     adapter.close()
+
+
+def test_images_apart_are_groups_of_their_own_holding_what_flattening_concatenates():
+    # One world of a vision task, seeded alike: "flattened" (the default) concatenates every
+    # observation in the spec's order; "apart" leaves the camera out of "policy".
+    adapters = {
+        images: RslRlVecEnv(
+            manipulation.batch.load("lift_brick_vision", 1, **{**_OPTIONS, "seed": 5}),
+            images=images,
+        )
+        for images in ("flattened", "apart")
+    }
+    try:
+        flat = adapters["flattened"].get_observations()
+        apart = adapters["apart"].get_observations()
+        spec = adapters["apart"].unwrapped.observation_spec()
+    finally:
+        for adapter in adapters.values():
+            adapter.close()
+    assert list(flat.keys()) == ["policy"]
+    assert list(apart.keys()) == ["policy", "front_close"]
+    assert apart["front_close"].shape == (1, *spec["front_close"].shape)
+    assert apart["front_close"].dtype == torch.float32
+    pieces, features = [], iter(apart["policy"][0])
+    for name, value in spec.items():
+        size = int(np.prod(value.shape))
+        if name == "front_close":
+            pieces.append(apart["front_close"][0].reshape(-1))
+        else:
+            pieces.append(torch.stack([next(features) for _ in range(size)]))
+    assert torch.equal(torch.cat(pieces), flat["policy"][0])
+    assert flat["policy"].shape[1] - apart["policy"].shape[1] == 84 * 84 * 3
+
+
+def test_an_unknown_images_choice_is_refused_naming_the_argument():
+    batch = _batch()
+    try:
+        with pytest.raises(ValueError, match="images: expected 'apart' or 'flattened'"):
+            RslRlVecEnv(batch, images="mixed")
+    finally:
+        batch.close()
