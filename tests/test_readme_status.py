@@ -33,8 +33,11 @@ def _status_row(part: str) -> str:
 
 
 def _ci_release_lists() -> list[str]:
-    """The `--releases` of each `tools.mujoco_versions` run in .ci/run, as written."""
+    """The `--releases` of each `tools.mujoco_versions` run in .ci/run, with the script's
+    bash arrays (`name=(a b)`, used as `"${name[@]}"`) written out."""
     ci = (ROOT / ".ci" / "run").read_text(encoding="utf-8")
+    for name, words in re.findall(r"^(\w+)=\(([^)\n]*)\)$", ci, re.M):
+        ci = ci.replace(f'"${{{name}[@]}}"', words)
     lists = re.findall(r"python -m tools\.mujoco_versions --releases ([^\n]+?) --strict", ci)
     assert lists, ".ci/run does not run tools.mujoco_versions with --releases"
     return lists

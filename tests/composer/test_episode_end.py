@@ -166,28 +166,38 @@ def _assert_rows_equal(batch, row, expected):
         np.testing.assert_array_equal(batch[key][row], value, err_msg=key)
 
 
+#: (terminated, truncated) of the two sub-environments over three steps: the first's task
+#: ends its episode at step 2, the second's time limit ends its own at step 3.
+_TWO_ENDS = [
+    ([False, False], [False, False]),
+    ([True, False], [False, False]),
+    ([False, False], [False, True]),
+]
+
+
+def _three_steps(envs, action: np.ndarray) -> list:
+    """Resets `envs` (seed 0), takes three steps of `action`, closes it, asserts the
+    `_TWO_ENDS` flags and returns the three steps' results."""
+    try:
+        envs.reset(seed=0)
+        steps = [envs.step(action) for _ in range(3)]
+    finally:
+        envs.close()
+    flags = [(terminated.tolist(), truncated.tolist()) for _, _, terminated, truncated, _ in steps]
+    assert flags == _TWO_ENDS
+    return steps
+
+
 @pytest.mark.parametrize("mode", ["NextStep", "SameStep"])
 def test_threaded_vector_env_ends_and_restarts_episodes_as_the_mode_says(mode):
     pytest.importorskip("gymnasium", reason="needs the extra [gym]")
     from composer.gym import ThreadedVectorEnv
 
     last, first = _sub_env_zero_alone()
-    # Sub-environment 0's task ends its episode at step 2; sub-environment 1's time limit
-    # ends its own at step 3.
     envs = ThreadedVectorEnv(
         [lambda: _gymnasium_env(True), lambda: _gymnasium_env(False)], 1, autoreset_mode=mode
     )
-    try:
-        envs.reset(seed=0)
-        steps = [envs.step(np.zeros((2, 2))) for _ in range(3)]
-    finally:
-        envs.close()
-    flags = [(terminated.tolist(), truncated.tolist()) for _, _, terminated, truncated, _ in steps]
-    assert flags == [
-        ([False, False], [False, False]),
-        ([True, False], [False, False]),
-        ([False, False], [False, True]),
-    ]
+    steps = _three_steps(envs, np.zeros((2, 2)))
     ended, ended_infos = steps[1][0], steps[1][4]
     restarted, rewards = steps[2][0], steps[2][1]
     if mode == "NextStep":
@@ -244,18 +254,7 @@ def _batch_with_two_ends(mode: str):
 @pytest.mark.warp
 @pytest.mark.parametrize("mode", ["next_step", "same_step"])
 def test_warp_vector_env_ends_and_restarts_worlds_as_the_mode_says(mode):
-    envs = _batch_with_two_ends(mode)
-    try:
-        envs.reset(seed=0)
-        steps = [envs.step(np.zeros((2, 9))) for _ in range(3)]
-    finally:
-        envs.close()
-    flags = [(terminated.tolist(), truncated.tolist()) for _, _, terminated, truncated, _ in steps]
-    assert flags == [
-        ([False, False], [False, False]),
-        ([True, False], [False, False]),
-        ([False, False], [False, True]),
-    ]
+    steps = _three_steps(_batch_with_two_ends(mode), np.zeros((2, 9)))
     np.testing.assert_array_equal(steps[1][4]["discount"], [0.0, 1.0])
     rewards = steps[2][1]
     if mode == "next_step":
