@@ -9,13 +9,14 @@ files of dm_control's `composer`, `mjcf`, `entities`, `suite`, `mujoco`, `rl` an
 packages out of that install (nothing of dm_control is kept in the repository), and runs
 them with `dm_control.composer` / `dm_control.mjcf` / `dm_control.mujoco` served by
 this project through `composer.dm_control_compat`. Exception types are checked, message
-wording is not. It then loads every `dm_control.manipulation` `*_features` task and
-`reach_site_vision`, every task of `suite.ALL_TASKS` (and renders a frame of each), the
-environments of `locomotion.examples.basic_cmu_2019` / `basic_rodent_2020` and
-`soccer.load(team_size=2)` through the same redirect, from a working directory of its
-own, and runs each for a reset and 100 random steps (actions uniform within the action
-spec's bounds, within [-1, 1] where a bound is MuJoCo's "unbounded" 1e10); it compares a few
-suite trajectories with raw `mj_step` and runs the README's dm_control examples.
+wording is not. While the tests run, a process of its own loads every
+`dm_control.manipulation` `*_features` task and `reach_site_vision`, every task of
+`suite.ALL_TASKS` (and renders a frame of each), the environments of
+`locomotion.examples.basic_cmu_2019` / `basic_rodent_2020` and `soccer.load(team_size=2)`
+through the same redirect, from a working directory of its own, and runs each for a reset
+and 100 random steps (actions uniform within the action spec's bounds, within [-1, 1] where
+a bound is MuJoCo's "unbounded" 1e10); it compares a few suite trajectories with raw
+`mj_step` and runs the README's dm_control examples.
 
 Last, it runs DeepMind's MoMa (dm_robotics) tests through the same redirect
 (`tools.moma_conformance`; `--moma-only` runs just those, about a minute once the venv
@@ -283,7 +284,6 @@ def copy_tests(python: Path, packages: tuple[str, ...] = TESTED_PACKAGES) -> Pat
 def run_tests(python: Path, tests: Path) -> tuple[list[FileResult], list[str]]:
     """Runs the copied tests; returns per-file counts and the failing test ids."""
     report = CACHE / "junit.xml"
-    env = dict(os.environ, MUJOCO_GL=os.environ.get("MUJOCO_GL", "egl"))
     subprocess.run(
         [
             str(python),
@@ -305,7 +305,7 @@ def run_tests(python: Path, tests: Path) -> tuple[list[FileResult], list[str]]:
             str(tests),
         ],
         cwd=CACHE,
-        env=env,
+        env=_harness_environment(),
         stdout=subprocess.DEVNULL,
         stderr=subprocess.DEVNULL,
     )
@@ -335,25 +335,42 @@ def _display_path(path: str) -> str:
     return path.split(".tests.dm_control_", 1)[-1].replace(".", "/") + ".py"
 
 
-def run_tasks(python: Path) -> dict:
-    """Loads and steps the environments in the venv, from an empty working directory of
-    their own (asset paths must not depend on it); returns name -> result."""
-    env = dict(os.environ, MUJOCO_GL=os.environ.get("MUJOCO_GL", "egl"))
+def start_tasks(python: Path) -> subprocess.Popen:
+    """Starts loading and stepping the environments in the venv, from an empty working
+    directory of their own (asset paths must not depend on it), in a process of its own
+    (one core: it runs beside the tests on the other cores), its output into files under
+    the cache; `finish_tasks` reads them."""
     workdir = CACHE / "task-workdir"
     workdir.mkdir(exist_ok=True)
-    completed = subprocess.run(
-        [str(python), "-c", _TASK_RUNNER, str(EPISODE_STEPS)],
-        capture_output=True,
-        text=True,
-        env=env,
-        cwd=workdir,
-    )
-    for line in completed.stdout.splitlines():
+    with open(CACHE / "tasks.out", "w") as out, open(CACHE / "tasks.err", "w") as err:
+        return subprocess.Popen(
+            [str(python), "-c", _TASK_RUNNER, str(EPISODE_STEPS)],
+            stdout=out,
+            stderr=err,
+            env=_harness_environment(),
+            cwd=workdir,
+        )
+
+
+def finish_tasks(python: Path, runner: subprocess.Popen) -> dict:
+    """Waits for the environments started by `start_tasks`, then runs the README's
+    examples; returns name -> result."""
+    runner.wait()
+    for line in (CACHE / "tasks.out").read_text().splitlines():
         if line.startswith("RESULTS"):
             outcome = json.loads(line[len("RESULTS") :])
-            outcome["environments"].update(run_readme_examples(python, env, workdir))
+            workdir = CACHE / "task-workdir"
+            outcome["environments"].update(
+                run_readme_examples(python, _harness_environment(), workdir)
+            )
             return outcome
-    raise RuntimeError(f"the task runner printed no results:\n{completed.stderr[-3000:]}")
+    stderr = (CACHE / "tasks.err").read_text()
+    raise RuntimeError(f"the task runner printed no results:\n{stderr[-3000:]}")
+
+
+def _harness_environment() -> dict:
+    """This process's environment, rendering with EGL unless MUJOCO_GL says otherwise."""
+    return dict(os.environ, MUJOCO_GL=os.environ.get("MUJOCO_GL", "egl"))
 
 
 def run_readme_examples(python: Path, env: dict, workdir: Path) -> dict:
@@ -496,6 +513,7 @@ def main() -> int:
     if args.moma_only:
         return moma_conformance.run(python, CACHE)
     status = 0
+    tasks = None if args.tests_only else start_tasks(python)
     if not args.tasks_only:
         results, failing = run_tests(python, copy_tests(python, tuple(args.packages)))
         rate = print_test_table(results, failing)
@@ -504,8 +522,8 @@ def main() -> int:
         if rate < args.floor:
             print(f"pass rate {rate:.1%} is below the floor {args.floor:.1%}")
             status = 1
-    if not args.tests_only:
-        outcome = run_tasks(python)
+    if tasks is not None:
+        outcome = finish_tasks(python, tasks)
         save_summary("environments", _environment_figures(outcome["environments"]))
         if print_task_table(outcome["environments"]) + print_trajectory_table(
             outcome["trajectories"]
