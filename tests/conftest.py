@@ -17,15 +17,46 @@ os.environ.setdefault("MUJOCO_GL", "egl")
 SCREEN = (1024, 768)
 
 
+# The MuJoCo Warp tests that compile Warp's kernels shared by every model (minutes on a
+# first run): under pytest-xdist they run first, on one worker.
+_WARP_WARM_UP = "tests/composer/batch/test_batch_physics.py"
+
+
 @pytest.hookimpl(tryfirst=True)
 def pytest_collection_modifyitems(config, items):
-    # Under pytest-xdist with `--dist loadgroup` (.ci/run), one worker runs every MuJoCo Warp
-    # test, so Warp's kernels compile once, not once per worker; the other tests spread.
-    # (pytest 9.2 keeps node ids where xdist 3.8 cannot add the group: pyproject's [test]
-    # extra holds pytest below it.)
+    if config.pluginmanager.hasplugin("xdist"):
+        _order_warp_tests_for_two_workers(items)
+    _skip_the_patch_table_off_its_release(items)
+
+
+def _order_warp_tests_for_two_workers(items):
+    """Orders and groups the MuJoCo Warp tests for pytest-xdist's `--dist loadgroup` with
+    `--no-loadscope-reorder` (.ci/run), so that no kernel compiles twice at once:
+
+    - the warm-up module's tests first, as one group: one worker compiles the kernels every
+      model shares while the other starts on the tests without Warp;
+    - every other Warp module last, each module a group (its tests share its tasks'
+      kernels and its module fixtures), the largest first: by the time a worker reaches
+      them the shared kernels are in the cache, and the modules spread over both workers.
+
+    (pytest 9.2 keeps node ids where xdist 3.8 cannot add the group: pyproject's [test]
+    extra holds pytest below it.) Called only where pytest-xdist is loaded."""
+    modules: dict[str, list] = {}
     for item in items:
         if "warp" in item.keywords:
-            item.add_marker(pytest.mark.xdist_group("warp"))
+            modules.setdefault(item.nodeid.split("::")[0], []).append(item)
+    if not modules:
+        return
+    warm_up = modules.pop(_WARP_WARM_UP if _WARP_WARM_UP in modules else next(iter(modules)))
+    last = sorted(modules.values(), key=len, reverse=True)
+    for group in [warm_up, *last]:
+        for item in group:
+            item.add_marker(pytest.mark.xdist_group(group[0].nodeid.split("::")[0]))
+    rest = [item for item in items if "warp" not in item.keywords]
+    items[:] = warm_up + rest + [item for group in last for item in group]
+
+
+def _skip_the_patch_table_off_its_release(items):
     # The checked-in patch table is proven on one MuJoCo release; on another it does not
     # apply (a proof cached by `python -m manipulation.patch_proof` may), so what it promises is
     # not there to check.
