@@ -136,7 +136,7 @@ def profile_steps(task: str, num_envs: int, steps: int) -> dict[str, object]:
     in_flight = []
     for _ in range(steps):
         actions = rng.uniform(-1, 1, (num_envs, *shape)).astype(np.float32)
-        ended = envs._episode_over.tolist()
+        ended = list(envs._episode_over)
         arguments = {i: (actions[i], mode, ended[i]) for i in range(num_envs)}
         with renders:
             begin = time.perf_counter()

@@ -31,6 +31,8 @@ def batch_copier(batch) -> Callable[[], Any]:
     if isinstance(batch, dict):
         kind = type(batch)
         parts = [(key, batch_copier(part)) for key, part in batch.items()]
+        if kind is dict:  # built as it is returned, not copied into another dict
+            return lambda: {key: copy() for key, copy in parts}
         return lambda: kind({key: copy() for key, copy in parts})
     if isinstance(batch, tuple):
         copiers = [batch_copier(part) for part in batch]

@@ -42,6 +42,10 @@ __all__ = [
 ]
 
 
+# The Python types whose infos `VectorEnv._add_info` batches into arrays of that type.
+_INFO_NUMBERS = frozenset((int, float, bool))
+
+
 class SubEnvironmentError(RuntimeError):
     """A sub-environment raised; `index` says which, the original error is `__cause__`."""
 
@@ -181,7 +185,12 @@ class SubEnvVectorEnv(VectorEnv):
         self._rewards = np.zeros(num_envs, dtype=np.float64)
         self._terminations = np.zeros(num_envs, dtype=np.bool_)
         self._truncations = np.zeros(num_envs, dtype=np.bool_)
-        self._episode_over = np.zeros(num_envs, dtype=np.bool_)
+        # Read and written per sub-environment on every step: a list of bools is cheaper
+        # there than an array. The autoreset rule is applied to one ended episode here,
+        # once, rather than on every step.
+        self._episode_over = [False] * num_envs
+        self._refuses_after_end = bool(self._autoreset.refuses_step(True))
+        self._over_after_end = bool(self._autoreset.over_after_step(True))
         self._box_actions = isinstance(self.action_space, gymnasium.spaces.Box)
 
     def _map(
@@ -251,10 +260,10 @@ class SubEnvVectorEnv(VectorEnv):
         self._check_open()
         mode = self._autoreset
         episode_over = self._episode_over
-        if self._autoreset.refuses_step(episode_over).any():
+        if self._refuses_after_end and True in episode_over:
             raise RuntimeError(
-                f"sub-environments {np.flatnonzero(episode_over).tolist()} ended their "
-                "episodes and autoreset_mode is DISABLED: reset them with "
+                f"sub-environments {[i for i, over in enumerate(episode_over) if over]} "
+                "ended their episodes and autoreset_mode is DISABLED: reset them with "
                 "reset(options={'reset_mask': mask}) before stepping"
             )
         # A Box's batch is an array whose rows are the actions: no need for `iterate`.
@@ -266,9 +275,10 @@ class SubEnvVectorEnv(VectorEnv):
             raise ValueError(
                 f"actions: expected one per sub-environment ({self.num_envs}), got {len(rows)}"
             )
-        ended = episode_over.tolist()
+        # The arguments hold each episode's state from before the step, which `_store`
+        # then updates.
         outcomes = self._step_sub_envs(
-            {i: (action, mode, ended[i]) for i, action in enumerate(rows)}
+            {i: (action, mode, episode_over[i]) for i, action in enumerate(rows)}
         )
         return (
             self._observations_out(),
@@ -389,14 +399,13 @@ class SubEnvVectorEnv(VectorEnv):
 
     def _store(self, index: int, outcome: SubEnvOutcome) -> None:
         """Writes one sub-environment's outcome into row `index` of the batched arrays."""
-        if outcome.observation is not self._rows[index]:  # not written there already
-            self._row_writers[index](outcome.observation)
-        self._rewards[index] = outcome.reward
-        self._terminations[index] = outcome.terminated
-        self._truncations[index] = outcome.truncated
-        self._episode_over[index] = self._autoreset.over_after_step(
-            outcome.terminated or outcome.truncated
-        )
+        observation, reward, terminated, truncated = outcome[:4]
+        if observation is not self._rows[index]:  # not written there already
+            self._row_writers[index](observation)
+        self._rewards[index] = reward
+        self._terminations[index] = terminated
+        self._truncations[index] = truncated
+        self._episode_over[index] = self._over_after_end and bool(terminated or truncated)
 
     def _observations_out(self):
         return self._copy_observations() if self.copy else self._observations
@@ -404,9 +413,11 @@ class SubEnvVectorEnv(VectorEnv):
     def _batched_infos(self, outcomes: dict[int, SubEnvOutcome]) -> dict[str, Any]:
         """Gymnasium's batching of the outcomes' infos (`VectorEnv._add_info`).
 
-        A key already batched as an array by an earlier sub-environment is filled in
-        here, as `_add_info` would fill it, without its call: the adapter's 'discount'
-        takes this way on every step of every sub-environment but the first.
+        Common infos take shorter ways to `_add_info`'s results, without its calls: a
+        number (int, float, bool or NumPy number) whose key is new gets the column and mask
+        `_add_info` would make for it (zeros of the number's type, and of bools), and a key
+        already batched as an array, with its mask, by an earlier sub-environment is
+        filled in. The adapter's 'discount' takes these ways on every step.
         """
         infos: dict[str, Any] = {}
         for i, outcome in outcomes.items():
@@ -418,10 +429,22 @@ class SubEnvVectorEnv(VectorEnv):
                 )
             for key, value in outcome.info.items():
                 column = infos.get(key)
-                batched = type(column) is np.ndarray and key != "final_obs"
-                if batched and not isinstance(value, dict):
-                    column[i] = value
-                    infos["_" + key][i] = True
-                else:
-                    infos = self._add_info(infos, {key: value}, i)
+                mask_key = "_" + key
+                if column is None:
+                    kind = type(value)
+                    if (kind in _INFO_NUMBERS or issubclass(kind, np.number)) and (
+                        mask_key not in infos and key != "final_obs"
+                    ):
+                        column = infos[key] = np.zeros(self.num_envs, dtype=kind)
+                        column[i] = value
+                        mask = infos[mask_key] = np.zeros(self.num_envs, dtype=np.bool_)
+                        mask[i] = True
+                        continue
+                elif type(column) is np.ndarray and key != "final_obs":
+                    mask = infos.get(mask_key)
+                    if type(mask) is np.ndarray and not isinstance(value, dict):
+                        column[i] = value
+                        mask[i] = True
+                        continue
+                infos = self._add_info(infos, {key: value}, i)
         return infos

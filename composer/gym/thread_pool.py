@@ -141,6 +141,7 @@ class PinnedThreadPool:
         num_threads = argument_checks.integer(or_none=True, num_threads=num_threads)
         self.num_threads = min(num_threads or os.cpu_count() or 1, self.size)
         self.owner = threading.current_thread()
+        self._owner_ident = self.owner.ident
         self._call = _Call(size)
         self._own_share = range(0, size, self.num_threads)
         self._workers = [
@@ -196,7 +197,8 @@ class PinnedThreadPool:
           SubEnvironmentError: for the lowest index whose task raised (the error is its
             `__cause__`), once all have finished.
         """
-        self._check_caller()
+        if self._closed or threading.get_ident() != self._owner_ident:
+            self._check_caller()
         if not self._workers:
             return self._run_alone(task, indices)
         if self._busy:
@@ -229,8 +231,10 @@ class PinnedThreadPool:
 
     def _run_alone(self, task: Callable[[int], Any], indices: Collection[int]) -> dict[int, Any]:
         """`run` for a pool of one thread: the owner runs every task, nothing is shared."""
+        size = self.size
         for i in indices:
-            self._check_index(i)
+            if not 0 <= i < size:
+                self._check_index(i)
         results, errors = {}, {}
         for i in indices:
             try:
@@ -249,7 +253,7 @@ class PinnedThreadPool:
     def _check_caller(self) -> None:
         if self._closed:
             raise RuntimeError(f"this {type(self).__name__} is closed")
-        if threading.get_ident() != self.owner.ident:
+        if threading.get_ident() != self._owner_ident:
             raise RuntimeError(
                 f"run() called from thread {threading.current_thread().name!r}; the pool "
                 f"runs slots on its owner thread {self.owner.name!r} (the one that made "

@@ -214,8 +214,9 @@ def test_shards_of_unequal_size_match_a_loop_and_wake_each_worker_once_per_step(
 
 
 class _InfoEnv(gymnasium.Env):
-    """Returns infos of every kind Gymnasium batches: numbers, arrays, objects, nested
-    dicts, and keys that only some sub-environments have."""
+    """Returns infos of every kind Gymnasium batches: numbers of each type (and one key
+    whose type differs between sub-environments), arrays, objects, nested dicts, keys
+    that only some sub-environments have, and a key that is another key's mask name."""
 
     observation_space = gymnasium.spaces.Box(-1.0, 1.0, (1,))
     action_space = gymnasium.spaces.Box(-1.0, 1.0, (1,))
@@ -228,6 +229,12 @@ class _InfoEnv(gymnasium.Env):
 
     def step(self, action):
         info = {"discount": 0.5 * self.index, "pose": np.full(3, self.index)}
+        info["flag"] = self.index % 2 == 1
+        info["scale"] = np.float32(self.index / 3)
+        # An int column from sub-environment 0, which the others' floats are cast into.
+        info["mixed"] = self.index if self.index % 2 == 0 else self.index + 0.5
+        info["seen"] = 2.0
+        info["_seen"] = self.index  # written into the mask of "seen", as Gymnasium does
         if self.index % 2:
             info["odd"] = {"label": f"env {self.index}", "count": self.index}
         if self.index >= 2:
@@ -236,7 +243,7 @@ class _InfoEnv(gymnasium.Env):
 
 
 def _assert_same_infos(got, expected):
-    assert got.keys() == expected.keys()
+    assert list(got) == list(expected)
     for key, value in expected.items():
         if isinstance(value, dict):
             _assert_same_infos(got[key], value)
