@@ -274,24 +274,27 @@ class StateSlots:
         k = self.slots_per_world
         self._allocate_values(results[0].states[0])
         self._write_shared(results[0].states[0].shared)
-        states = self._slot_states[1]
+        rows, states = [], []
         for result in results:
             self.random_states[result.world] = result.random_state
             for episode, state in zip(result.episodes, result.states):
-                row = result.world * k + episode % k
-                states[row] = state.state
-                for name, value in state.model_rows.items():
-                    self._slot_rows[name][1][row] = value.ravel()
-                for name, value in state.values.items():
-                    self._slot_values[name][1][row] = value.ravel()
                 if state.shared.keys() != self._shared_written.keys():
                     raise RuntimeError(
                         "initialize_episode changed different shared model fields in different "
                         f"workers: {sorted(state.shared)} and {sorted(self._shared_written)}"
                     )
+                rows.append(result.world * k + episode % k)
+                states.append(state)
             self._uploaded[result.world] = max(
                 self._uploaded[result.world], result.episodes[-1] + 1
             )
+        # One write per array for all the states (rows are distinct: a job asks for at most
+        # slots_per_world episodes of a world).
+        self._slot_states[1][rows] = np.stack([state.state for state in states])
+        for name, (_, host) in self._slot_rows.items():
+            host[rows] = np.stack([state.model_rows[name].ravel() for state in states])
+        for name, (_, host) in self._slot_values.items():
+            host[rows] = np.stack([state.values[name].ravel() for state in states])
         self._uploaded_on_device.assign(self._uploaded.astype(np.int32))
         if self._physics.is_cuda:
             for array, host in (
