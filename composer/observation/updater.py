@@ -117,6 +117,7 @@ class _EnabledObservable:
         "_last_scheduled",
         "_offsets_by_phase",
         "_period",
+        "_sample_spec",
         "is_gathered",
         "writer",
     )
@@ -124,6 +125,19 @@ class _EnabledObservable:
     def __init__(self, name, observable, physics, random_state, steps_per_control, strip, pad):
         self.name = name
         self.observable = observable
+        shape, dtype = self._bind(physics, random_state)
+        self.buffer_size = observable.buffer_size or DEFAULT_BUFFER_SIZE
+        self.aggregator = observable.aggregator
+        self._new_buffer(shape, dtype, strip, pad)
+        self._offsets_by_phase = {}
+        if self.is_stochastic:
+            self._period = None
+        else:
+            self._period = math.lcm(self.update_interval, steps_per_control)
+
+    def _bind(self, physics, random_state) -> tuple:
+        """Binds the observable's callable and options; returns one sample's (shape, dtype)."""
+        observable = self.observable
         self.observation_callable = observable.observation_callable(physics, random_state)
         self.update_interval, self._draw_interval = self._bind_option(
             observable.update_interval, DEFAULT_UPDATE_INTERVAL, random_state
@@ -131,28 +145,42 @@ class _EnabledObservable:
         self.delay, self._draw_delay = self._bind_option(
             observable.delay, DEFAULT_DELAY, random_state
         )
-        self.buffer_size = observable.buffer_size or DEFAULT_BUFFER_SIZE
-        self.aggregator = observable.aggregator
         spec = observable.array_spec
         if spec is None:
             # One sample gives the shape and dtype (the caller mutes physics errors).
             value = np.asarray(self.observation_callable())
-            shape, dtype = value.shape, value.dtype
-        else:
-            shape, dtype = spec.shape, spec.dtype
+            return value.shape, value.dtype
+        return spec.shape, spec.dtype
+
+    def _new_buffer(self, shape, dtype, strip, pad) -> None:
+        """An empty buffer for samples of `shape` and `dtype`, and a new sampling schedule."""
         self.writer = None
         self.is_gathered = False
         if self.buffer_size == 1 and self._draw_delay is None and self.delay == 0:
             self.buffer = obs_buffer.LatestSampleBuffer(shape, dtype, strip)
         else:
             self.buffer = obs_buffer.Buffer(self.buffer_size, shape, dtype, pad, strip)
+        self._sample_spec = (shape, np.dtype(dtype))
         self._schedule = []
         self._last_scheduled = 0
-        self._offsets_by_phase = {}
-        if self.is_stochastic:
-            self._period = None
-        else:
-            self._period = math.lcm(self.update_interval, steps_per_control)
+
+    def rebind(self, physics, random_state, strip, pad) -> bool:
+        """Starts a new episode with the same options: makes the calls into the observable
+        that construction makes, in its order, and empties the buffer.
+
+        Returns whether the buffer kept its kind and storage: False when a sample's shape or
+        dtype changed, the buffer then being new (its direct sampling is to be set up again).
+        A kept `LatestSampleBuffer` is not cleared: the reset's first sample overwrites it.
+        """
+        shape, dtype = self._bind(physics, random_state)
+        if (shape, np.dtype(dtype)) != self._sample_spec:
+            self._new_buffer(shape, dtype, strip, pad)
+            return False
+        self._schedule = []
+        self._last_scheduled = 0
+        if not self.keeps_one_sample:
+            self.buffer = obs_buffer.Buffer(self.buffer_size, shape, dtype, pad, strip)
+        return True
 
     @staticmethod
     def _bind_option(value, default, random_state):
@@ -467,7 +495,49 @@ class Updater:
         return self._sample_steps
 
     def reset(self, physics, random_state) -> None:
-        """Binds the enabled observables to `physics` and takes the first sample of each."""
+        """Binds the enabled observables to `physics` and takes the first sample of each.
+
+        When the physics, the random state and every observable's options are those of the
+        last reset, the observables bound then are bound again (the same calls into them,
+        in the same order) and keep their buffers' storage and direct sampling, emptied.
+        """
+        options = self._options()
+        if self._same_inputs(physics, random_state, options):
+            rebound = True
+            with physics.suppress_physics_errors():
+                for enabled in self._enabled_list:
+                    rebound &= enabled.rebind(
+                        physics,
+                        random_state,
+                        self._strip_singleton_buffer_dim,
+                        self._pad_with_initial_value,
+                    )
+            if rebound:
+                self._readers = [self._reader(d) for d in self._enabled_dicts()]
+                self._start_episode()
+                return
+            structure = self._enabled_structure
+        else:
+            structure = self._enable(physics, random_state)
+        self._finish_reset(physics, random_state, structure, options)
+
+    def _same_inputs(self, physics, random_state, options) -> bool:
+        """Whether the last reset had this physics (and data), random state and options."""
+        last = self._last_reset
+        return (
+            last is not None
+            and physics is last.physics
+            and _simulation_data(physics) is last.data
+            and random_state is last.random_state
+            and options == last.options
+        )
+
+    def _enabled_dicts(self) -> list:
+        structure = self._enabled_structure
+        return list(structure) if self._is_nested else [structure]
+
+    def _enable(self, physics, random_state):
+        """The structure of the observables, the enabled ones bound to `physics`."""
 
         def enable(observables):
             enabled = type(observables)()
@@ -489,12 +559,13 @@ class Updater:
         # errors are muted meanwhile.
         with physics.suppress_physics_errors():
             if self._is_nested:
-                structure = type(self._observables)(enable(d) for d in self._observables)
-                dicts = list(structure)
-            else:
-                structure = enable(self._observables)
-                dicts = [structure]
+                return type(self._observables)(enable(d) for d in self._observables)
+            return enable(self._observables)
+
+    def _finish_reset(self, physics, random_state, structure, options) -> None:
+        """Sets up sampling for the bound `structure` and takes the first samples."""
         self._enabled_structure = structure
+        dicts = self._enabled_dicts()
         self._enabled_list = [enabled for d in dicts for enabled in d.values()]
         # Direct sampling reads memory that is only up to date while the physics has no
         # pending forward(), which a physics without `is_dirty` cannot tell.
@@ -507,9 +578,7 @@ class Updater:
                 self._direct_sampling = layout
             self._gathers = layout.apply(eligible)
         self._physics = physics
-        self._last_reset = _ResetInputs(
-            physics, _simulation_data(physics), random_state, self._options()
-        )
+        self._last_reset = _ResetInputs(physics, _simulation_data(physics), random_state, options)
         self._readers = [self._reader(d) for d in dicts]
         if any(enabled.is_stochastic for enabled in self._enabled_list):
             self._plan_period = None
@@ -517,6 +586,10 @@ class Updater:
             self._plan_period = math.lcm(
                 self._steps, *(enabled.update_interval for enabled in self._enabled_list)
             )
+        self._start_episode()
+
+    def _start_episode(self) -> None:
+        """Restarts the step count and the plan, and takes each observable's first sample."""
         self._step_counter = 0
         self._reset_plan()
         for enabled in self._enabled_list:
@@ -538,15 +611,8 @@ class Updater:
         observable's options (enabled, update interval, delay, buffer size, aggregator,
         corruptor, spec) differ from the last one's, since the specs may then differ.
         """
-        last = self._last_reset
         options = self._options()
-        if (
-            last is None
-            or physics is not last.physics
-            or _simulation_data(physics) is not last.data
-            or random_state is not last.random_state
-            or options != last.options
-        ):
+        if not self._same_inputs(physics, random_state, options):
             self.reset(physics, random_state)
             return
         calls = []

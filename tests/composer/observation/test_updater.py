@@ -812,3 +812,53 @@ def test_reset_draws_after_an_observable_is_enabled_resets_the_specs_too():
     later.enabled = True
     obs_updater.reset_draws(clock, random_state)
     assert list(obs_updater.observation_spec()) == ["x", "later"]
+
+
+def test_second_reset_with_the_same_inputs_starts_afresh_as_a_new_updater():
+    def observables():
+        noisy_and_delayed, _ = _counted_observables([])
+        return {**noisy_and_delayed, "buffered": _scalar(buffer_size=3, update_interval=2)}
+
+    def control_step(obs_updater, clock):
+        obs_updater.prepare_for_next_control_step()
+        for _ in range(2):
+            clock.time += 1
+            obs_updater.update()
+        return obs_updater.get_observation()
+
+    clock, random_state = _Clock(), np.random.RandomState(5)
+    obs_updater = updater.Updater(observables(), 2)
+    obs_updater.reset(clock, random_state)
+    for _ in range(2):
+        control_step(obs_updater, clock)
+    clock.time = 10
+    state = random_state.get_state()
+    obs_updater.reset(clock, random_state)
+    # A new updater for the same observables, from the same clock and random state.
+    fresh_clock, fresh_random_state = _Clock(), np.random.RandomState()
+    fresh_clock.time = 10
+    fresh_random_state.set_state(state)
+    fresh = updater.Updater(observables(), 2)
+    fresh.reset(fresh_clock, fresh_random_state)
+    assert list(obs_updater.get_observation()["buffered"]) == [0.0, 0.0, 10.0]
+    for _ in range(3):
+        observation = control_step(obs_updater, clock)
+        expected = control_step(fresh, fresh_clock)
+        assert observation.keys() == expected.keys()
+        for name in expected:
+            np.testing.assert_array_equal(observation[name], expected[name])
+    assert random_state.randint(1 << 30) == fresh_random_state.randint(1 << 30)
+
+
+def test_second_reset_with_the_same_inputs_follows_a_changed_sample_shape():
+    size = [2]
+    obs_updater = updater.Updater(
+        {"x": _enabled(observable.Generic(lambda p: np.ones(size[0])))}, 1
+    )
+    clock, random_state = _Clock(), np.random.RandomState(0)
+    obs_updater.reset(clock, random_state)
+    assert obs_updater.observation_spec()["x"].shape == (1, 2)
+    size[0] = 4
+    obs_updater.reset(clock, random_state)
+    assert obs_updater.observation_spec()["x"].shape == (1, 4)
+    assert obs_updater.get_observation()["x"].tolist() == [[1.0] * 4]
