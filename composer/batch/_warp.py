@@ -21,11 +21,6 @@ from typing import NamedTuple
 #: keeps its own default (a per-user cache directory).
 KERNEL_CACHE_ENV = "COMPOSER_WARP_KERNEL_CACHE"
 
-#: The environment variable giving the optimisation level (0 to 3) Warp compiles kernels at.
-#: Unset, Warp's default (2 on the CPU, 3 for CUDA). On the CPU, 0 compiles a model's
-#: kernels about a third faster and runs them slower: for tests and short runs.
-OPTIMIZATION_LEVEL_ENV = "COMPOSER_WARP_OPTIMIZATION_LEVEL"
-
 _INSTALL_HINT = "composer.batch needs MuJoCo Warp: pip install 'mujoco-composer[warp]'"
 
 
@@ -57,13 +52,11 @@ def load(device: str | None = None) -> WarpModules:
 
     Returns:
       `WarpModules`: `warp` (logging warnings only, its kernel cache in
-      `$COMPOSER_WARP_KERNEL_CACHE` and its optimisation level
-      `$COMPOSER_WARP_OPTIMIZATION_LEVEL` when those are set) and `mujoco_warp`.
+      `$COMPOSER_WARP_KERNEL_CACHE` when that is set) and `mujoco_warp`.
 
     Raises:
       ImportError: when `mujoco_warp` or `warp` is not installed; the message says how to
         install them.
-      ValueError: when `$COMPOSER_WARP_OPTIMIZATION_LEVEL` is not 0, 1, 2 or 3.
     """
     global _modules
     if _modules is None:
@@ -77,26 +70,12 @@ def load(device: str | None = None) -> WarpModules:
         cache = os.environ.get(KERNEL_CACHE_ENV)
         if cache:
             warp.config.kernel_cache_dir = os.path.abspath(cache)
-        level = os.environ.get(OPTIMIZATION_LEVEL_ENV)
-        if level:
-            warp.config.optimization_level = _optimization_level(level)
         if device is not None and str(device).startswith("cuda"):
             warp.init()
         else:
             _init_without_driver_warning(warp)
         _modules = WarpModules(warp=warp, mujoco_warp=mujoco_warp)
     return _modules
-
-
-def _optimization_level(text: str) -> int:
-    """`text`, the value of `$COMPOSER_WARP_OPTIMIZATION_LEVEL`, as a level; a ValueError
-    naming the variable for anything but 0 to 3."""
-    if text.strip() not in ("0", "1", "2", "3"):
-        raise ValueError(
-            f"{OPTIMIZATION_LEVEL_ENV}={text!r}: expected an optimisation level 0, 1, 2 or 3 "
-            "(or leave it unset for Warp's default)"
-        )
-    return int(text)
 
 
 def _init_without_driver_warning(warp: ModuleType) -> None:

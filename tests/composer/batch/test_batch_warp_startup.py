@@ -70,33 +70,3 @@ def test_what_else_warp_prints_at_start_up_still_reaches_stderr(no_cuda_driver):
     )
     assert "another start-up message" in run.stderr
     assert _WARNING not in run.stderr
-
-
-def _load_with_level(level: str) -> subprocess.CompletedProcess:
-    return subprocess.run(
-        [
-            sys.executable,
-            "-c",
-            "from composer.batch import _warp; "
-            "print(_warp.load('cpu').warp.config.optimization_level)",
-        ],
-        capture_output=True,
-        text=True,
-        timeout=600,
-        env={**os.environ, "COMPOSER_WARP_OPTIMIZATION_LEVEL": level},
-    )
-
-
-def test_the_optimization_level_variable_sets_warps_compile_level():
-    run = _load_with_level("0")
-    assert run.returncode == 0, run.stderr
-    assert run.stdout.strip() == "0"
-
-
-def test_an_optimization_level_that_is_not_one_is_refused_naming_the_variable():
-    run = _load_with_level("fast")
-    assert run.returncode != 0
-    assert (
-        "ValueError: COMPOSER_WARP_OPTIMIZATION_LEVEL='fast': expected an optimisation level "
-        "0, 1, 2 or 3"
-    ) in run.stderr
