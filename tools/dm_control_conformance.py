@@ -49,6 +49,16 @@ CACHE = scratch_venv.CACHE / "dm_control_conformance"
 #: The figures a run leaves for the README (see the module docstring).
 SUMMARY = ROOT / "docs" / "data" / "dm_control_conformance.json"
 DM_CONTROL_VERSION = "1.0.50"
+#: Where the environment runner (`start_tasks`) works and writes what it prints.
+TASK_WORKDIR = CACHE / "task-workdir"
+TASK_OUTPUT = CACHE / "tasks.out"
+TASK_ERRORS = CACHE / "tasks.err"
+#: Seconds each part may take before it is killed and the run fails naming it: dm_control's
+#: tests (about 7 minutes on CI's 2 cores), the environment runner (about 3 minutes on one
+#: core) and each README example (seconds). A hang fails here, not at CI's own limit.
+TESTS_TIMEOUT = 1800
+TASKS_TIMEOUT = 1200
+README_EXAMPLE_TIMEOUT = 300
 # What dm_control's tests import beyond its own requirements; protobuf below 7, whose
 # FieldDescriptor no longer has the `label` that dm_control 1.0.50's mocap loader reads (its
 # tracking tests fail with protobuf 7 whatever serves composer).
@@ -284,6 +294,32 @@ def copy_tests(python: Path, packages: tuple[str, ...] = TESTED_PACKAGES) -> Pat
 def run_tests(python: Path, tests: Path) -> tuple[list[FileResult], list[str]]:
     """Runs the copied tests; returns per-file counts and the failing test ids."""
     report = CACHE / "junit.xml"
+    try:
+        _run_pytest(python, tests, report)
+    except subprocess.TimeoutExpired:
+        raise RuntimeError(
+            f"dm_control's tests ({tests}) did not finish within {TESTS_TIMEOUT} s and were killed"
+        ) from None
+    counts: dict[str, list[int]] = {}
+    failing: list[str] = []
+    for case in ElementTree.parse(report).getroot().iter("testcase"):
+        path = _display_path(case.get("file") or case.get("classname", "?"))
+        bucket = counts.setdefault(path, [0, 0, 0])
+        outcome = {child.tag for child in case}
+        if outcome & {"failure", "error"}:
+            bucket[1] += 1
+            test_class = case.get("classname", "").split(".")[-1]
+            failing.append(f"{path}::{test_class}::{case.get('name')}")
+        elif "skipped" in outcome:
+            bucket[2] += 1
+        else:
+            bucket[0] += 1
+    results = [FileResult(path, *numbers) for path, numbers in sorted(counts.items())]
+    return results, failing
+
+
+def _run_pytest(python: Path, tests: Path, report: Path) -> None:
+    """Runs pytest on the copied tests on every core, its JUnit report into `report`."""
     subprocess.run(
         [
             str(python),
@@ -308,23 +344,8 @@ def run_tests(python: Path, tests: Path) -> tuple[list[FileResult], list[str]]:
         env=_harness_environment(),
         stdout=subprocess.DEVNULL,
         stderr=subprocess.DEVNULL,
+        timeout=TESTS_TIMEOUT,
     )
-    counts: dict[str, list[int]] = {}
-    failing: list[str] = []
-    for case in ElementTree.parse(report).getroot().iter("testcase"):
-        path = _display_path(case.get("file") or case.get("classname", "?"))
-        bucket = counts.setdefault(path, [0, 0, 0])
-        outcome = {child.tag for child in case}
-        if outcome & {"failure", "error"}:
-            bucket[1] += 1
-            test_class = case.get("classname", "").split(".")[-1]
-            failing.append(f"{path}::{test_class}::{case.get('name')}")
-        elif "skipped" in outcome:
-            bucket[2] += 1
-        else:
-            bucket[0] += 1
-    results = [FileResult(path, *numbers) for path, numbers in sorted(counts.items())]
-    return results, failing
 
 
 def _display_path(path: str) -> str:
@@ -340,32 +361,45 @@ def start_tasks(python: Path) -> subprocess.Popen:
     directory of their own (asset paths must not depend on it), in a process of its own
     (one core: it runs beside the tests on the other cores), its output into files under
     the cache; `finish_tasks` reads them."""
-    workdir = CACHE / "task-workdir"
-    workdir.mkdir(exist_ok=True)
-    with open(CACHE / "tasks.out", "w") as out, open(CACHE / "tasks.err", "w") as err:
+    TASK_WORKDIR.mkdir(exist_ok=True)
+    with open(TASK_OUTPUT, "w") as out, open(TASK_ERRORS, "w") as err:
         return subprocess.Popen(
             [str(python), "-c", _TASK_RUNNER, str(EPISODE_STEPS)],
             stdout=out,
             stderr=err,
             env=_harness_environment(),
-            cwd=workdir,
+            cwd=TASK_WORKDIR,
         )
 
 
 def finish_tasks(python: Path, runner: subprocess.Popen) -> dict:
     """Waits for the environments started by `start_tasks`, then runs the README's
-    examples; returns name -> result."""
-    runner.wait()
-    for line in (CACHE / "tasks.out").read_text().splitlines():
+    examples; returns name -> result.
+
+    Raises:
+      RuntimeError: when the runner is still running after `TASKS_TIMEOUT` seconds (it is
+        killed) or printed no results; with the end of what it wrote to stderr.
+    """
+    try:
+        runner.wait(timeout=TASKS_TIMEOUT)
+    except subprocess.TimeoutExpired:
+        runner.kill()
+        runner.wait()
+        raise RuntimeError(
+            f"the environment runner did not finish within {TASKS_TIMEOUT} s and was killed; "
+            f"its stderr ({TASK_ERRORS}) ends:\n{TASK_ERRORS.read_text()[-3000:]}"
+        ) from None
+    for line in TASK_OUTPUT.read_text().splitlines():
         if line.startswith("RESULTS"):
             outcome = json.loads(line[len("RESULTS") :])
-            workdir = CACHE / "task-workdir"
             outcome["environments"].update(
-                run_readme_examples(python, _harness_environment(), workdir)
+                run_readme_examples(python, _harness_environment(), TASK_WORKDIR)
             )
             return outcome
-    stderr = (CACHE / "tasks.err").read_text()
-    raise RuntimeError(f"the task runner printed no results:\n{stderr[-3000:]}")
+    raise RuntimeError(
+        f"the environment runner printed no results; its stderr ({TASK_ERRORS}) ends:\n"
+        f"{TASK_ERRORS.read_text()[-3000:]}"
+    )
 
 
 def _harness_environment() -> dict:
@@ -381,14 +415,20 @@ def run_readme_examples(python: Path, env: dict, workdir: Path) -> dict:
     results = {}
     for number, block in enumerate(section.split("```python\n")[1:], start=1):
         start = time.perf_counter()
-        completed = subprocess.run(
-            [str(python), "-c", block.split("```", 1)[0]],
-            capture_output=True,
-            text=True,
-            env=env,
-            cwd=workdir,
-        )
         name = f"README example {number}"
+        try:
+            completed = subprocess.run(
+                [str(python), "-c", block.split("```", 1)[0]],
+                capture_output=True,
+                text=True,
+                env=env,
+                cwd=workdir,
+                timeout=README_EXAMPLE_TIMEOUT,
+            )
+        except subprocess.TimeoutExpired:
+            error = f"did not finish within {README_EXAMPLE_TIMEOUT} s and was killed"
+            results[name] = {"group": "readme", "ok": False, "error": error}
+            continue
         if completed.returncode == 0:
             results[name] = {"group": "readme", "ok": True, "seconds": time.perf_counter() - start}
         else:
