@@ -35,11 +35,12 @@ import os
 import subprocess
 import sys
 from pathlib import Path
-from typing import NamedTuple
-
-import numpy as np
+from typing import TYPE_CHECKING, NamedTuple
 
 from tools import ROOT, dm_control_conformance, scratch_venv
+
+if TYPE_CHECKING:  # NumPy is imported where it is used: `--install-only` runs without it.
+    import numpy as np
 
 CACHE = scratch_venv.CACHE / "dm_control_seeds"
 DM_CONTROL_VERSION = dm_control_conformance.DM_CONTROL_VERSION
@@ -109,6 +110,8 @@ def start_side(
 
 def finish_side(side: Side) -> Episodes:
     """Waits for a side's runners and joins what they recorded."""
+    import numpy as np
+
     arrays: dict[str, np.ndarray] = {}
     draws: dict[str, list] = {}
     errors: dict[str, str] = {}
@@ -139,6 +142,8 @@ def _first_draw_difference(reference: list, project: list) -> str | None:
 
 def _largest(reference: Episodes, project: Episodes, prefix: str, suffix: str) -> tuple:
     """The largest |difference| over the keys `prefix...suffix`, and the key it is in."""
+    import numpy as np
+
     worst, worst_key = 0.0, None
     for key, want in reference.arrays.items():
         if not (key.startswith(prefix) and suffix in key[len(prefix) :]):

@@ -33,7 +33,7 @@ import time
 from pathlib import Path
 from typing import NamedTuple
 
-from tools import ROOT
+from tools import ROOT, scratch_venv
 
 CACHE = ROOT / ".cache" / "mujoco_versions"
 _COMPAT_MODULE = ROOT / "mujoco_physics" / "version.py"
@@ -164,8 +164,23 @@ def _run(args: list[str], log, **kwargs) -> int:
     return subprocess.run(args, stdout=log, stderr=subprocess.STDOUT, **kwargs).returncode
 
 
+def _project_requirements() -> list[str]:
+    """The project's dependencies and its `[test]` extra, from its pyproject.toml (none on
+    Python 3.10, which cannot read it: there the project's install brings them)."""
+    try:
+        import tomllib
+    except ImportError:
+        return []
+    project = tomllib.loads((ROOT / "pyproject.toml").read_text(encoding="utf-8"))["project"]
+    return [*project["dependencies"], *project["optional-dependencies"]["test"]]
+
+
 def _install(venv: Path, release: Release, log) -> str:
-    """Builds `venv` for `release` unless it exists; returns a problem or ''."""
+    """Builds `venv` for `release` unless it exists; returns a problem or ''.
+
+    The project's requirements are installed first, then the project itself editable under
+    `scratch_venv.project_install_lock` (so CI can build the venvs while its own venv
+    installs)."""
     marker = venv / ".installed"
     # The project's requirements are part of what a venv was built with: rebuild when the
     # `[test]` extra or the dependencies change.
@@ -177,23 +192,25 @@ def _install(venv: Path, release: Release, log) -> str:
     if _run([sys.executable, "-m", "venv", "--clear", str(venv)], log):
         return "venv creation failed"
     pip = [str(venv / "bin" / "python"), "-m", "pip", "install", "-q"]
-    mujoco = f"mujoco=={release.version}"
-    if release.below_floor:
-        # The project's own requirement excludes this mujoco: install the project with its
-        # dependencies first, then put the old mujoco in its place. Newer mujoco wheels leave
-        # files that pip does not remove (plugins linked to their libmujoco), hence the rmtree.
-        if _run([*pip, "-e", f"{ROOT}[test]"], log):
+    # Below the floor the project's own requirement excludes this mujoco: the project is
+    # installed with its dependencies first, then the old mujoco put in its place.
+    mujoco = [] if release.below_floor else [f"mujoco=={release.version}"]
+    if _run([*pip, *_project_requirements(), *mujoco], log):
+        return "install failed"
+    with scratch_venv.project_install_lock():
+        if _run([*pip, "-e", f"{ROOT}[test]", *mujoco], log):
             return "install failed"
+    if release.below_floor:
+        # Newer mujoco wheels leave files that pip does not remove (plugins linked to their
+        # libmujoco), hence the rmtree.
         if _run(
             [str(venv / "bin" / "python"), "-m", "pip", "uninstall", "-q", "-y", "mujoco"], log
         ):
             return "uninstall failed"
         for leftover in venv.glob("lib/python*/site-packages/mujoco"):
             shutil.rmtree(leftover)
-        if _run([*pip, mujoco], log):
+        if _run([*pip, f"mujoco=={release.version}"], log):
             return "install failed"
-    elif _run([*pip, "-e", f"{ROOT}[test]", mujoco], log):
-        return "install failed"
     marker.write_text(built_with, encoding="utf-8")
     return ""
 
