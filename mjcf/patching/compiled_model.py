@@ -47,7 +47,10 @@ class CompiledModel:
       `root` than last time, a structural change, or a MuJoCo on which snapshots are not
       supported): a new Physics replaces the old one, which is freed.
 
-    Every outcome but NEW_PHYSICS keeps the Physics object, its bindings and its views.
+    Every outcome but NEW_PHYSICS keeps the Physics object, its bindings and its views,
+    and tells it that its model changed in place (`Physics.model_changed_in_place`): its
+    next render equals that of a fresh compile's Physics, its render contexts refreshed
+    only where what they hold of the model changed.
     The look-ups that size patches keep go with the Physics
     (`mjcf.patching.geom_size_cache`).
 
@@ -107,17 +110,20 @@ class CompiledModel:
             changes = root.attribute_changes_since(self._compiled_count)
             if changes == ():
                 snapshot.restore()
+                self._physics.model_changed_in_place()
                 return ModelUpdate.RESTORED
             if changes and self._patch:
                 snapshot.restore()
                 if self._physics.apply_attribute_changes(changes):
                     snapshot.save()
+                    self._physics.model_changed_in_place()
                     if not self._physics.changes_are_forward_neutral(changes):
                         self._reset_state.invalidate()
                     return ModelUpdate.PATCHED
         self._reset_state.invalidate()
         model = compile_mjcf_model(root)
         if snapshot is not None and snapshot.load(model):
+            self._physics.model_changed_in_place()
             return ModelUpdate.LOADED
         physics = Physics.from_compiled_mjcf_model(root, model)
         if self._physics is not None:
