@@ -20,6 +20,8 @@ context.
 
 from __future__ import annotations
 
+import functools
+import operator
 from collections.abc import Callable
 from typing import NamedTuple
 
@@ -50,9 +52,9 @@ def _family_arrays(prefix: str) -> tuple[str, ...]:
 _FAMILY_ARRAYS = {prefix: _family_arrays(prefix) for prefix in _FAMILIES}
 
 
-def _struct_bytes(struct) -> bytes:
-    """Every value of MuJoCo struct `struct`, nested structs included, as bytes."""
-    parts = []
+def _field_paths(struct, prefix: tuple[str, ...] = ()) -> list[tuple[str, ...]]:
+    """The attribute paths of every value of MuJoCo struct `struct`, nested ones included."""
+    paths = []
     for name in sorted(dir(struct)):
         if name.startswith("_"):
             continue
@@ -60,15 +62,26 @@ def _struct_bytes(struct) -> bytes:
         if isinstance(value, type):
             continue
         if isinstance(value, (np.ndarray, int, float)):
-            parts.append(np.asarray(value).tobytes())
+            paths.append(prefix + (name,))
         else:
-            parts.append(_struct_bytes(value))
-    return b"".join(parts)
+            paths.extend(_field_paths(value, prefix + (name,)))
+    return paths
+
+
+@functools.cache
+def _vis_fields() -> tuple[Callable, ...]:
+    """Getters of every value of `MjModel.vis`, read once from a model's struct."""
+    vis = mujoco.MjModel.from_xml_string("<mujoco/>").vis
+    return tuple(operator.attrgetter(".".join(path)) for path in _field_paths(vis))
+
+
+def _vis_bytes(vis) -> bytes:
+    return b"".join(np.asarray(field(vis)).tobytes() for field in _vis_fields())
 
 
 def _context_bytes(model: mujoco.MjModel) -> bytes:
     """The inputs only a new context refreshes, as bytes."""
-    parts = [_struct_bytes(model.vis), np.float64(model.stat.extent).tobytes()]
+    parts = [_vis_bytes(model.vis), np.float64(model.stat.extent).tobytes()]
     parts.append(model.geom_size[model.geom_type == _PLANE].tobytes())
     for prefix, upload in _FAMILIES.items():
         if upload is None:

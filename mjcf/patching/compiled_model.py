@@ -47,10 +47,14 @@ class CompiledModel:
       `root` than last time, a structural change, or a MuJoCo on which snapshots are not
       supported): a new Physics replaces the old one, which is freed.
 
-    Every outcome but NEW_PHYSICS keeps the Physics object, its bindings and its views,
-    and tells it that its model changed in place (`Physics.model_changed_in_place`): its
-    next render equals that of a fresh compile's Physics, its render contexts refreshed
-    only where what they hold of the model changed.
+    Every outcome but NEW_PHYSICS keeps the Physics object, its bindings and its views.
+    PATCHED and LOADED tell it that its model changed in place
+    (`Physics.model_changed_in_place`): its next render equals that of a fresh compile's
+    Physics, its render contexts refreshed only where what they hold of the model
+    changed. RESTORED needs no refresh: it gives the model of the last update back, which
+    the contexts hold (code that writes the model and uploads it to the contexts itself,
+    through `physics.contexts`, uploads again after each reset, as on dm_control's new
+    Physics).
     The look-ups that size patches keep go with the Physics
     (`mjcf.patching.geom_size_cache`).
 
@@ -110,7 +114,6 @@ class CompiledModel:
             changes = root.attribute_changes_since(self._compiled_count)
             if changes == ():
                 snapshot.restore()
-                self._physics.model_changed_in_place()
                 return ModelUpdate.RESTORED
             if changes and self._patch:
                 snapshot.restore()
