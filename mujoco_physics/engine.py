@@ -473,6 +473,14 @@ class Physics:
         del self._sim, self._model, self._data, self._layout, self._ctrl
         self.__class__ = _freed_class(type(self))
 
+    def model_changed_in_place(self) -> None:
+        """Says that the model's parameters were written in place (by a patch, or the load
+        of another compile: `mjcf.patching`): the next render refreshes what the render
+        contexts hold of the model where it changed (`rendering.Renderers.model_changed`),
+        so that images equal those of a Physics made afresh from the model."""
+        if self._renderers is not None:
+            self._renderers.model_changed()
+
     def _offscreen_renderers(self) -> Renderers:
         if self._renderers is None:
             self._renderers = Renderers(self._sim.model)

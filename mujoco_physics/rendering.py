@@ -8,6 +8,7 @@ import mujoco
 import numpy as np
 
 from mujoco_physics import _gl_backend
+from mujoco_physics.render_inputs import RenderInputs, upload_asset_family
 
 _RENDER_FLAG_PREFIX = "mjRND_"
 
@@ -90,11 +91,46 @@ def render_flag(flag) -> int:
 
 
 class Renderers:
-    """Renders one model's scenes, keeping a `mujoco.Renderer` per (height, width)."""
+    """Renders one model's scenes, keeping a `mujoco.Renderer` per (height, width).
+
+    A renderer's context holds what it read from the model when it was made
+    (`mujoco_physics.render_inputs`). After `model_changed()`, the next use compares the
+    model with what the contexts hold: changed meshes, height fields or textures are
+    uploaded again into every context; any other change of what a context holds (`vis`,
+    the extent, planes, materials' texture mapping, skins) closes the renderers, so that
+    new ones are made from the model as it is. Anything else (colours, poses) costs
+    nothing: images always equal those of renderers made afresh from the model.
+    """
 
     def __init__(self, model: mujoco.MjModel):
         self._model = model
         self._renderers = {}
+        # What the contexts read from the model; None while there are no renderers.
+        self._inputs: RenderInputs | None = None
+        self._model_changed = False
+
+    def model_changed(self) -> None:
+        """Says the model may have changed in place: the next use refreshes the contexts
+        where what they hold differs from the model."""
+        self._model_changed = True
+
+    def _refresh(self) -> None:
+        if not self._model_changed:
+            return
+        self._model_changed = False
+        if self._inputs is None:
+            return
+        if self._inputs.context_is_stale(self._model):
+            self.close()
+            return
+        stale = self._inputs.stale_assets(self._model)
+        if not stale:
+            return
+        for renderer in self._renderers.values():
+            renderer._gl_context.make_current()
+            for prefix in stale:
+                upload_asset_family(self._model, renderer._mjr_context, prefix)
+        self._inputs = RenderInputs.of(self._model)
 
     def camera_id(self, camera_id) -> int:
         """A camera index from a camera name or index (see `camera_index`)."""
@@ -135,6 +171,7 @@ class Renderers:
     def contexts(self) -> "Contexts | None":
         """dm_control's `physics.contexts` over these renderers, or None before the first
         render (a renderer made later uploads the model's current assets itself)."""
+        self._refresh()
         if not self._renderers:
             return None
         return Contexts(gl=_AllGLContexts(list(self._renderers.values())), mujoco=MJR_CONTEXT)
@@ -144,6 +181,7 @@ class Renderers:
         for renderer in self._renderers.values():
             renderer.close()
         self._renderers.clear()
+        self._inputs = None
 
     def renderer(self, height: int, width: int) -> mujoco.Renderer:
         """The renderer of images of (`height`, `width`), made on first use.
@@ -151,6 +189,7 @@ class Renderers:
         Raises:
           ValueError: for an image larger than the model's offscreen buffer.
         """
+        self._refresh()
         key = (int(height), int(width))
         renderer = self._renderers.get(key)
         if renderer is None:
@@ -160,6 +199,8 @@ class Renderers:
             if key[0] > buffer.offheight or key[1] > buffer.offwidth:
                 raise frame_limit_error(key[0], key[1], buffer)
             renderer = _gl_backend.new_renderer(self._model, height=key[0], width=key[1])
+            if self._inputs is None:
+                self._inputs = RenderInputs.of(self._model)
             self._renderers[key] = renderer
         return renderer
 

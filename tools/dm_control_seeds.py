@@ -18,6 +18,11 @@ For every environment and seed it compares:
 - the first observation and `--steps` steps of observations and rewards under fixed
   actions, within 1e-6.
 
+Both sides render with the same harness setting, applied right after each environment is
+made: a 512-pixel shadow map without multisampling (`seed_episode_runner.RENDER_QUALITY`,
+through the MJCF model, so dm_control's reset recompiles with it and the project's updates
+its model and render contexts in place); the images are compared at the same tolerance.
+
 It prints one row per environment, with its first differing quantity, and exits 1 when
 any differs. With `--mujoco4`, it also runs the project side on mujoco 4 (the venv of
 `tools.dm_control_conformance`, whose dm_control is the same release) and reports the

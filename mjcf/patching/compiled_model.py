@@ -48,6 +48,13 @@ class CompiledModel:
       supported): a new Physics replaces the old one, which is freed.
 
     Every outcome but NEW_PHYSICS keeps the Physics object, its bindings and its views.
+    PATCHED and LOADED tell it that its model changed in place
+    (`Physics.model_changed_in_place`): its next render equals that of a fresh compile's
+    Physics, its render contexts refreshed only where what they hold of the model
+    changed. RESTORED needs no refresh: it gives the model of the last update back, which
+    the contexts hold (code that writes the model and uploads it to the contexts itself,
+    through `physics.contexts`, uploads again after each reset, as on dm_control's new
+    Physics).
     The look-ups that size patches keep go with the Physics
     (`mjcf.patching.geom_size_cache`).
 
@@ -112,12 +119,14 @@ class CompiledModel:
                 snapshot.restore()
                 if self._physics.apply_attribute_changes(changes):
                     snapshot.save()
+                    self._physics.model_changed_in_place()
                     if not self._physics.changes_are_forward_neutral(changes):
                         self._reset_state.invalidate()
                     return ModelUpdate.PATCHED
         self._reset_state.invalidate()
         model = compile_mjcf_model(root)
         if snapshot is not None and snapshot.load(model):
+            self._physics.model_changed_in_place()
             return ModelUpdate.LOADED
         physics = Physics.from_compiled_mjcf_model(root, model)
         if self._physics is not None:

@@ -77,9 +77,6 @@ def snapshots_supported() -> bool:
     return _buffer_pointer_offset() is not None
 
 
-# Families whose arrays the renderer copies to the GPU once per context: a model whose
-# meshes or textures differ needs new render contexts, so they count as structure.
-_UPLOADED_PREFIXES = ("mesh_", "skin_", "hfield_", "tex_")
 _WORD = np.dtype(np.uint64)
 _structure_masks: dict[tuple, np.ndarray] = {}
 _MAX_STRUCTURE_MASKS = 16
@@ -88,10 +85,12 @@ _MAX_STRUCTURE_MASKS = 16
 def _structure_mask(model: mujoco.MjModel, start: int, layout: tuple) -> np.ndarray:
     """Per 8-byte word of the buffer: True unless it holds a free float parameter.
 
-    Float arrays (masses, sizes, colours, gains, ...) are parameters that a recompile
-    may change without invalidating anything built on the model; every other byte
-    (ids, addresses, types, names, uploaded assets, padding) is structure. Arrays are
-    8-byte aligned, so no word mixes the two. Cached per `layout` key.
+    Float arrays (masses, sizes, colours, gains, mesh vertices, height field
+    elevations, ...) are parameters that a recompile may change without invalidating
+    anything built on the model (render contexts refresh what they copied of them:
+    `mujoco_physics.render_inputs`); every other byte (ids, addresses, types, names,
+    texture pixels, padding) is structure. Arrays are 8-byte aligned, so no word mixes
+    the two. Cached per `layout` key.
     """
     mask = _structure_masks.get(layout)
     if mask is not None:
@@ -99,7 +98,7 @@ def _structure_mask(model: mujoco.MjModel, start: int, layout: tuple) -> np.ndar
     mask = np.ones(model.nbuffer // _WORD.itemsize, dtype=bool)
     for name in MODEL_FIELDS.arrays:
         array = getattr(model, name)
-        if array.size and array.dtype.kind == "f" and not name.startswith(_UPLOADED_PREFIXES):
+        if array.size and array.dtype.kind == "f":
             offset = array.ctypes.data - start
             first = offset // _WORD.itemsize
             last = -(-(offset + array.nbytes) // _WORD.itemsize)
