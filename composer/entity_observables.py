@@ -86,8 +86,12 @@ class Observables:
         if not fully_qualified:
             return self._observables.copy()
         prefix = _model_scope(self._entity)
+        if not prefix:
+            return self._observables.copy()
+        # `posixpath.join(prefix, name)`, as the prefix ends with '/'; joined by hand as this
+        # runs for every observable at every reset.
         return collections.OrderedDict(
-            (posixpath.join(prefix, name), observable)
+            (name if name.startswith("/") else prefix + name, observable)
             for name, observable in self._observables.items()
         )
 

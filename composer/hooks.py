@@ -1,6 +1,7 @@
 """Finds the lifecycle hooks a task and its entities implement, and calls only those."""
 
 import functools
+import operator
 from collections.abc import Callable
 
 from composer.entity import Entity
@@ -22,6 +23,8 @@ _BASE_NO_OPS = frozenset(
     + [getattr(Task, name) for name in HOOK_NAMES if name != "before_step"]
 )
 _SETS_CONTROLS = Task.before_step
+# An object's hooks, looked up as the environment would call them, in `HOOK_NAMES` order.
+_LOOK_UP_HOOKS = operator.attrgetter(*HOOK_NAMES)
 
 
 def _empty():
@@ -62,8 +65,9 @@ class EnvironmentHooks:
     For each hook name the task's hook runs first, then each entity's (depth first
     through the entity tree), then the extra hooks in the order they were added.
     Hooks that do nothing (the base classes' defaults, or empty functions) are left
-    out. `refresh_entity_hooks` rescans the task and the entity tree; the environment
-    calls it at every reset and compile, so hooks replaced between episodes are used.
+    out. `refresh_entity_hooks` brings the chains up to date with the task and the entity
+    tree; the environment calls it at every reset and compile, so hooks replaced between
+    episodes (on an object or its class) and entities attached or detached are used.
     Task and extra hooks receive the action where entity hooks do not: `before_step`
     and `before_substep` are called as `task_or_extra_hook(physics, action,
     random_state)` and `entity_hook(physics, random_state)`.
@@ -78,6 +82,7 @@ class EnvironmentHooks:
         "_task",
         "_extra_hooks",
         "_chains",
+        "_scanned",
         "has_substep_hooks",
         "has_after_compile_hooks",
         "has_before_step_hooks",
@@ -89,11 +94,18 @@ class EnvironmentHooks:
         self._task = task
         self._extra_hooks = {name: () for name in HOOK_NAMES}
         self._chains = {}
+        self._scanned = None
         self.refresh_entity_hooks()
 
     def refresh_entity_hooks(self) -> None:
-        """Rescans the task and its entity tree for hooks that do something."""
-        entities = list(self._task.root_entity.iter_entities())
+        """Rescans the task and its entity tree for hooks that do something, unless every
+        object's hooks are the very ones of the last scan (then the chains are up to date)."""
+        entities = (*self._task.root_entity.iter_entities(),)
+        # Bound methods compare equal when they bind the same function to the same object.
+        scanned = (*map(_LOOK_UP_HOOKS, (self._task, *entities)),)
+        if scanned == self._scanned:
+            return
+        self._scanned = scanned
         task_before_step = self._task.before_step
         self.task_sets_controls = getattr(task_before_step, "__func__", None) is _SETS_CONTROLS
         for name in HOOK_NAMES:

@@ -53,21 +53,29 @@ class ResetState:
     The kept data belongs to one MjModel object: a reset of a Physics with another model
     (a recompile) resets afresh. Data is kept from the second reset of a model on, so a
     model that is reset once (a task whose structure changes every episode) costs no
-    MjData of its own. A reset whose forward warned keeps nothing, so the next one raises
-    (or logs) the warning again; with bindings that lack `mj_copyData` (mujoco 3.3)
-    nothing is ever kept.
+    MjData of its own. Once kept data was invalidated unused, resets that follow an
+    invalidation keep nothing (a model changed before every reset, such as one patched
+    every episode, costs no copies) until a reset follows none, or kept data is used. A
+    reset whose forward warned keeps nothing, so the next one raises (or logs) the warning
+    again; with bindings that lack `mj_copyData` (mujoco 3.3) nothing is ever kept.
     """
 
-    __slots__ = ("_model", "_data", "_seen")
+    __slots__ = ("_model", "_data", "_seen", "_used", "_wasted", "_invalidated")
 
     def __init__(self):
         self._model: mujoco.MjModel | None = None  # the model `_data` is valid for
         self._data: mujoco.MjData | None = None
         self._seen: mujoco.MjModel | None = None  # the model of the last reset afresh
+        self._used = False  # whether `_data` was copied since it was kept
+        self._wasted = False  # whether the last kept data was invalidated unused
+        self._invalidated = False  # whether `invalidate()` was called since the last reset
 
     def invalidate(self) -> None:
         """Forgets the kept data: the model may have changed in a field forward reads."""
+        if self._model is not None and not self._used:
+            self._wasted = True
         self._model = None
+        self._invalidated = True
 
     def reset(self, physics: Physics) -> None:
         """Leaves `physics`'s data as `physics.reset()` would.
@@ -76,15 +84,19 @@ class ResetState:
           PhysicsError: as `physics.reset()` does, when it resets afresh.
         """
         model = physics.model.ptr
+        invalidated, self._invalidated = self._invalidated, False
         if self._model is model and not _outside_code_takes_part(model):
             physics.copy_data_from(self._data)
+            self._used, self._wasted = True, False
             return
         self._model = None
         physics.reset()
         first_reset, self._seen = self._seen is not model, model
-        if first_reset or not _may_keep(model, physics.data.ptr):
+        if first_reset or (invalidated and self._wasted):
+            return
+        if not _may_keep(model, physics.data.ptr):
             return
         if self._data is None or self._data.model is not model:
             self._data = mujoco.MjData(model)
         mujoco.mj_copyData(self._data, model, physics.data.ptr)
-        self._model = model
+        self._model, self._used = model, False

@@ -23,6 +23,10 @@ _NEVER = math.inf
 # Plans are cached per phase of the schedule; this bounds the cache when intervals have a
 # very large least common multiple.
 _MAX_CACHED_PLANS = 4096
+# An observable's options as `Updater._options` lists them, after its name and identity.
+_OPTIONS = operator.attrgetter(
+    "update_interval", "delay", "buffer_size", "aggregator", "corruptor", "array_spec"
+)
 
 
 class _DueEntry(NamedTuple):
@@ -617,12 +621,10 @@ class Updater:
             return
         calls = []
         with physics.suppress_physics_errors():
-            for name, observable, *_ in options:
+            for name, observable, _, delay, _, _, _, array_spec in options:
                 sample = observable.observation_callable(physics, random_state)
-                _, draw_delay = _EnabledObservable._bind_option(
-                    observable.delay, DEFAULT_DELAY, random_state
-                )
-                if observable.array_spec is None:
+                _, draw_delay = _EnabledObservable._bind_option(delay, DEFAULT_DELAY, random_state)
+                if array_spec is None:
                     np.asarray(sample())
                 calls.append((name, sample, draw_delay))
         for name, sample, draw_delay in calls:
@@ -635,16 +637,7 @@ class Updater:
         physics and the random state, what the structure `reset` builds depends on, besides
         sampled shapes."""
         return [
-            (
-                name,
-                observable,
-                observable.update_interval,
-                observable.delay,
-                observable.buffer_size,
-                observable.aggregator,
-                observable.corruptor,
-                observable.array_spec,
-            )
+            (name, observable, *_OPTIONS(observable))
             for d in (self._observables if self._is_nested else [self._observables])
             for name, observable in d.items()
             if observable.enabled

@@ -71,6 +71,11 @@ class Variation(metaclass=abc.ABCMeta):
         return _GetItemOperation(self, index)
 
 
+# Types whose values `evaluate` returns as they are, found without the (slower) abstract
+# `isinstance` check: the constants that variations are mixed with.
+_CONSTANTS = frozenset([float, int, bool, str, type(None), np.ndarray, np.float64])
+
+
 def evaluate(structure, *args, **kwargs):
     """Returns `structure` with every `Variation` inside it replaced by its value.
 
@@ -78,9 +83,11 @@ def evaluate(structure, *args, **kwargs):
     (numbers, arrays, strings, ...) is returned unchanged. `args` and `kwargs` are passed to
     each variation: `(initial_value, current_value, random_state)`.
     """
+    kind = type(structure)
+    if kind in _CONSTANTS:
+        return structure
     if isinstance(structure, Variation):
         return structure(*args, **kwargs)
-    kind = type(structure)
     if kind is list:
         return [evaluate(item, *args, **kwargs) for item in structure]
     if kind is tuple:

@@ -17,6 +17,9 @@ from composer.variation import base
 def _channels(owner: str, names: tuple[str, ...], values) -> list[float]:
     channels = []
     for name, value in zip(names, values):
+        if isinstance(value, float):  # what a distribution draws: a single number already
+            channels.append(float(value))
+            continue
         array = np.asarray(value, dtype=np.float64)
         if array.size != 1:
             raise ValueError(
