@@ -15,7 +15,10 @@ wording is not. While the tests run, a process of its own loads every
 `locomotion.examples.basic_cmu_2019` / `basic_rodent_2020` and `soccer.load(team_size=2)`
 through the same redirect, from a working directory of its own, and runs each for a reset
 and 100 random steps (actions uniform within the action spec's bounds, within [-1, 1] where
-a bound is MuJoCo's "unbounded" 1e10); it compares a few suite trajectories with raw
+a bound is MuJoCo's "unbounded" 1e10), the composer environments rendering with the seed
+harness's setting (`tools/seed_episode_runner.py`'s `render_cheaply`, a 512-pixel shadow map
+without multisampling: with CI's software renderer the default map made the camera
+observations most of the run's time); it compares a few suite trajectories with raw
 `mj_step` and runs the README's dm_control examples.
 
 Last, it runs DeepMind's MoMa (dm_robotics) tests through the same redirect
@@ -168,6 +171,8 @@ import functools, inspect, json, sys, time
 import numpy as np
 from composer import dm_control_compat
 dm_control_compat.install()
+sys.path.insert(0, sys.argv[2])  # tools/: the seed harness's render setting
+from seed_episode_runner import render_cheaply
 from dm_control import manipulation, suite
 from dm_control.locomotion import soccer
 from dm_control.locomotion.examples import basic_cmu_2019, basic_rodent_2020
@@ -198,6 +203,8 @@ for group, name, load in _loaders():
     try:
         start = time.perf_counter()
         env = load()
+        if group != "suite":
+            render_cheaply(env)
         specs = env.action_spec()
         rng = np.random.RandomState(0)
         env.reset()
@@ -364,7 +371,7 @@ def start_tasks(python: Path) -> subprocess.Popen:
     TASK_WORKDIR.mkdir(exist_ok=True)
     with open(TASK_OUTPUT, "w") as out, open(TASK_ERRORS, "w") as err:
         return subprocess.Popen(
-            [str(python), "-c", _TASK_RUNNER, str(EPISODE_STEPS)],
+            [str(python), "-c", _TASK_RUNNER, str(EPISODE_STEPS), str(ROOT / "tools")],
             stdout=out,
             stderr=err,
             env=_harness_environment(),
