@@ -171,8 +171,7 @@ import functools, inspect, json, sys, time
 import numpy as np
 from composer import dm_control_compat
 dm_control_compat.install()
-sys.path.insert(0, sys.argv[2])  # tools/: the seed harness's render setting
-from seed_episode_runner import render_cheaply
+from tools.seed_episode_runner import render_cheaply  # PYTHONPATH: the repository
 from dm_control import manipulation, suite
 from dm_control.locomotion import soccer
 from dm_control.locomotion.examples import basic_cmu_2019, basic_rodent_2020
@@ -371,10 +370,14 @@ def start_tasks(python: Path) -> subprocess.Popen:
     TASK_WORKDIR.mkdir(exist_ok=True)
     with open(TASK_OUTPUT, "w") as out, open(TASK_ERRORS, "w") as err:
         return subprocess.Popen(
-            [str(python), "-c", _TASK_RUNNER, str(EPISODE_STEPS), str(ROOT / "tools")],
+            [str(python), "-c", _TASK_RUNNER, str(EPISODE_STEPS)],
             stdout=out,
             stderr=err,
-            env=_harness_environment(),
+            # The repository on the import path, for the seed harness's render setting.
+            env=dict(
+                _harness_environment(),
+                PYTHONPATH=os.pathsep.join(filter(None, [str(ROOT), os.environ.get("PYTHONPATH")])),
+            ),
             cwd=TASK_WORKDIR,
         )
 
