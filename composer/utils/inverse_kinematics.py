@@ -84,7 +84,7 @@ def nullspace_method(
 def _check_target(name: str, target, size: int) -> np.ndarray | None:
     if target is None:
         return None
-    target = np.asarray(target, dtype=np.float64)
+    target = np.ascontiguousarray(target, dtype=np.float64)
     if target.shape != (size,):
         raise ValueError(f"{name}: expected shape ({size},), got {target.shape}")
     return target
@@ -220,11 +220,9 @@ def qpos_from_site_pose(
             break
         if update_norm > max_update_norm:
             update *= max_update_norm / update_norm
-        if update_nv is None:
-            update_nv = update
-        else:
+        if dof_indices is not None:
             update_nv[dof_indices] = update
-        mujoco.mj_integratePos(model, qpos, update_nv, 1.0)
+        mujoco.mj_integratePos(model, qpos, update if dof_indices is None else update_nv, 1.0)
         mujoco.mj_kinematics(model, data)
         mujoco.mj_comPos(model, data)
 
