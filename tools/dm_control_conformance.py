@@ -72,6 +72,10 @@ TEST_EXTRAS = ["mock", "pytest", "pytest-xdist", "pillow", "h5py", "protobuf<7"]
 #: environment and locomotion).
 TESTED_PACKAGES = ("composer", "mjcf", "entities", "suite", "mujoco", "rl", "locomotion")
 
+#: Single dm_control test files run besides those packages: tests of a module this project
+#: serves from a package whose other modules stay dm_control's own.
+TESTED_FILES = ("utils/inverse_kinematics_test.py",)
+
 #: Test files that check dm_control's own internals (its copied schema, its attribute
 #: classes, its debug mode), not behaviour that users rely on.
 EXCLUDED_TEST_FILES = {
@@ -264,7 +268,8 @@ class FileResult(NamedTuple):
 
 
 def copy_tests(python: Path, packages: tuple[str, ...] = TESTED_PACKAGES) -> Path:
-    """Copies the test files and test assets of dm_control's `packages` out of the venv."""
+    """Copies the test files and test assets of dm_control's `packages`, and the files of
+    `TESTED_FILES`, out of the venv."""
     location = subprocess.run(
         [
             str(python),
@@ -293,6 +298,10 @@ def copy_tests(python: Path, packages: tuple[str, ...] = TESTED_PACKAGES) -> Pat
                 target = destination / f"dm_control_{relative}"
                 target.parent.mkdir(parents=True, exist_ok=True)
                 shutil.copy2(path, target)
+    for relative in TESTED_FILES:
+        target = destination / f"dm_control_{relative}"
+        target.parent.mkdir(parents=True, exist_ok=True)
+        shutil.copy2(source / relative, target)
     (destination / "conftest.py").write_text(_CONFTEST.format(helpers=HELPER_MODULES))
     return destination
 

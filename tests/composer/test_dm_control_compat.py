@@ -111,6 +111,31 @@ def test_rl_control_physics_error_of_an_installed_dm_control_is_ours(tmp_path):
     assert result.stdout.split("\n")[:2] == ["True", "caught mujoco_physics.engine"]
 
 
+def test_dm_control_inverse_kinematics_is_ours_and_other_utils_stay_dm_controls(tmp_path):
+    # A stand-in for an installed dm_control whose utils package has its own modules.
+    utils = tmp_path / "dm_control" / "utils"
+    utils.mkdir(parents=True)
+    (tmp_path / "dm_control" / "__init__.py").write_text("")
+    (utils / "__init__.py").write_text("")
+    (utils / "rewards.py").write_text("ORIGIN = 'stand-in'\n")
+    (utils / "inverse_kinematics.py").write_text("raise ImportError('the stand-in ran')\n")
+    result = _run_python(
+        textwrap.dedent(
+            f"""
+            import sys
+            sys.path.insert(0, {str(tmp_path)!r})
+            from composer import dm_control_compat
+            dm_control_compat.install()
+            from dm_control.utils import inverse_kinematics as ik, rewards
+            import composer.utils.inverse_kinematics
+            print(ik is composer.utils.inverse_kinematics, rewards.ORIGIN)
+            """
+        )
+    )
+    assert result.returncode == 0, result.stderr
+    assert result.stdout.split("\n")[0] == "True stand-in"
+
+
 def test_model_built_through_dm_control_names_compiles_and_binds():
     result = _run_python(
         textwrap.dedent(

@@ -1,5 +1,6 @@
 """Tests for composer.utils.inverse_kinematics.qpos_from_site_pose on a 6-DOF arm."""
 
+import copy
 from unittest import mock
 
 import mujoco
@@ -137,8 +138,11 @@ def test_only_listed_joints_move(physics):
 
 
 def test_requires_a_target(physics):
-    with pytest.raises(ValueError, match="target_pos and target_quat"):
+    with pytest.raises(ValueError) as raised:
         inverse_kinematics.qpos_from_site_pose(physics, "tcp")
+    assert str(raised.value) == (
+        "qpos_from_site_pose: expected target_pos, target_quat or both, got neither"
+    )
 
 
 def test_unknown_site_is_rejected_by_name(physics):
@@ -153,11 +157,26 @@ def test_unknown_joint_is_rejected_by_name(physics):
         )
 
 
-def test_joint_names_given_as_a_string_are_rejected(physics):
-    with pytest.raises(ValueError, match="joint_names.*got str"):
+@pytest.mark.parametrize("joint_names", ["elbow", 3, {"elbow": 1}])
+def test_joint_names_of_another_type_are_rejected_naming_the_type(physics, joint_names):
+    with pytest.raises(ValueError) as raised:
         inverse_kinematics.qpos_from_site_pose(
-            physics, "tcp", target_pos=[0, 0, 1], joint_names="elbow"
+            physics, "tcp", target_pos=[0, 0, 1], joint_names=joint_names
         )
+    assert str(raised.value) == (
+        "qpos_from_site_pose: joint_names: expected None or a list, tuple or numpy array of "
+        f"joint names, got {type(joint_names)}"
+    )
+
+
+def test_error_messages_are_the_module_constants_dm_control_tests_read(physics):
+    # dm_control's own IK tests compare raised messages with these two module constants.
+    with pytest.raises(ValueError) as raised:
+        inverse_kinematics.qpos_from_site_pose(physics, "tcp", target_pos=[0, 0, 1], joint_names=1)
+    assert str(raised.value) == inverse_kinematics._INVALID_JOINT_NAMES_TYPE.format(int)
+    with pytest.raises(ValueError) as raised:
+        inverse_kinematics.qpos_from_site_pose(physics, "tcp")
+    assert str(raised.value) == inverse_kinematics._REQUIRE_TARGET_POS_OR_QUAT
 
 
 def test_target_of_wrong_shape_is_rejected(physics):
@@ -192,3 +211,187 @@ def test_nullspace_method_regularization_damps_only_the_diagonal():
     jac = np.array([[1.0, 1.0], [0.0, 1.0]])
     step = inverse_kinematics.nullspace_method(jac, np.array([1.0, 2.0]), 1.0)
     np.testing.assert_allclose(step, [0.0, 1.0], atol=1e-12)
+
+
+# --- Exactness: the documented algorithm, run plainly with mj_fwdPosition every iteration ---
+
+BALL_CHAIN_XML = """
+<mujoco>
+  <worldbody>
+    <geom type="plane" size="1 1 0.1" pos="0 0 0.3"/>
+    <body name="link_1" pos="0 0 0.3">
+      <joint name="ball_1" type="ball"/>
+      <geom type="capsule" fromto="0 0 0 0 0 0.2" size="0.02"/>
+      <body name="link_2" pos="0 0 0.2">
+        <joint name="hinge" axis="0 1 0"/>
+        <geom type="capsule" fromto="0 0 0 0 0 0.2" size="0.02"/>
+        <body name="link_3" pos="0 0 0.2">
+          <joint name="ball_2" type="ball"/>
+          <geom type="capsule" fromto="0 0 0 0 0 0.1" size="0.02"/>
+          <site name="tip" pos="0 0 0.1"/>
+        </body>
+      </body>
+    </body>
+  </worldbody>
+</mujoco>
+"""
+
+# The arm standing in a floor plane that cuts its base: the data holds contacts.
+ARM_ON_FLOOR_XML = ARM_XML.replace(
+    "<worldbody>", '<worldbody><geom type="plane" size="1 1 0.1" pos="0 0 0.1"/>', 1
+)
+
+
+def _reference_ik(
+    physics,
+    site_name,
+    target_pos=None,
+    target_quat=None,
+    joint_names=None,
+    tol=1e-14,
+    rot_weight=1.0,
+    regularization_threshold=0.1,
+    regularization_strength=3e-2,
+    max_update_norm=2.0,
+    progress_thresh=20.0,
+    max_steps=100,
+):
+    """dm_control's documented damped least squares, with full mj_fwdPosition each step:
+    returns (qpos, err_norm, steps, success, data)."""
+    model = physics.model.ptr
+    data = copy.copy(physics.data.ptr)
+    mujoco.mj_fwdPosition(model, data)
+    site_id = model.site(site_name).id
+    dofs = None
+    if joint_names is not None:
+        dofs = [
+            dof
+            for name in joint_names
+            for dof in np.flatnonzero(model.dof_jntid == model.joint(name).id)
+        ]
+    err_norm, steps, success = 0.0, 0, False
+    for step in range(max_steps):
+        steps = step
+        parts, jacobians, err_norm = [], [], 0.0
+        if target_pos is not None:
+            parts.append(np.asarray(target_pos, float) - data.site_xpos[site_id])
+            err_norm += np.linalg.norm(parts[-1])
+        if target_quat is not None:
+            site_quat, conjugate, difference = np.empty(4), np.empty(4), np.empty(4)
+            velocity = np.empty(3)
+            mujoco.mju_mat2Quat(site_quat, data.site_xmat[site_id])
+            mujoco.mju_negQuat(conjugate, site_quat)
+            mujoco.mju_mulQuat(difference, np.asarray(target_quat, float), conjugate)
+            mujoco.mju_quat2Vel(velocity, difference, 1)
+            parts.append(velocity)
+            err_norm += np.linalg.norm(velocity) * rot_weight
+        if err_norm < tol:
+            success = True
+            break
+        jacp, jacr = np.empty((3, model.nv)), np.empty((3, model.nv))
+        mujoco.mj_jacSite(model, data, jacp, jacr, site_id)
+        if target_pos is not None:
+            jacobians.append(jacp)
+        if target_quat is not None:
+            jacobians.append(jacr)
+        jac, err = np.vstack(jacobians), np.concatenate(parts)
+        jac_joints = jac if dofs is None else jac[:, dofs]
+        hessian = jac_joints.T.dot(jac_joints)
+        gradient = jac_joints.T.dot(err)
+        if err_norm > regularization_threshold and regularization_strength > 0:
+            hessian += np.eye(len(hessian)) * regularization_strength
+            update = np.linalg.solve(hessian, gradient)
+        else:
+            update = np.linalg.lstsq(hessian, gradient, rcond=-1)[0]
+        update_norm = np.linalg.norm(update)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            if err_norm / update_norm > progress_thresh:
+                break
+        if update_norm > max_update_norm:
+            update *= max_update_norm / update_norm
+        update_nv = np.zeros(model.nv)
+        update_nv[slice(None) if dofs is None else dofs] = update
+        mujoco.mj_integratePos(model, data.qpos, update_nv, 1)
+        mujoco.mj_fwdPosition(model, data)
+    return data.qpos.copy(), err_norm, steps, success, data
+
+
+def _assert_same_bits(result, reference):
+    qpos, err_norm, steps, success, _ = reference
+    assert result.qpos.tobytes() == qpos.tobytes()
+    assert np.float64(result.err_norm).tobytes() == np.float64(err_norm).tobytes()
+    assert (result.steps, result.success) == (steps, success)
+
+
+EXACTNESS_CASES = {
+    "position, all joints": dict(target_pos=[0.3, 0.2, 0.6]),
+    "pose, rot_weight 2, joint list": dict(
+        target_pos=[0.35, -0.1, 0.55],
+        target_quat=[0.5, 0.5, -0.5, 0.5],
+        rot_weight=2,
+        joint_names=["yaw", "shoulder", "elbow", "wrist_roll", "wrist_pitch", "hand_roll"],
+    ),
+    "orientation, joint tuple out of order": dict(
+        target_quat=[0.0, 1.0, 0.0, 1.0] / np.sqrt(2),
+        joint_names=("wrist_pitch", "yaw", "hand_roll", "elbow"),
+    ),
+    "position, no regularisation, joint array": dict(
+        target_pos=[0.1, 0.3, 0.7],
+        regularization_strength=0.0,
+        joint_names=np.array(["shoulder", "elbow", "wrist_pitch", "yaw"]),
+    ),
+    "out of reach, runs out of steps": dict(
+        target_pos=[2 * REACH, 0.0, 0.2], max_steps=12, progress_thresh=np.inf
+    ),
+    "pose, stops for lack of progress": dict(
+        target_pos=[0.3, 0.2, 0.6], target_quat=[1.0, 0.0, 0.0, 0.0], joint_names=["yaw"]
+    ),
+}
+
+
+@pytest.mark.parametrize("case", EXACTNESS_CASES)
+def test_results_are_bitwise_those_of_the_plain_algorithm(physics, case):
+    arguments = EXACTNESS_CASES[case]
+    result = inverse_kinematics.qpos_from_site_pose(physics, "tcp", **arguments)
+    _assert_same_bits(result, _reference_ik(physics, "tcp", **arguments))
+
+
+def test_ball_joints_move_all_their_dofs_bitwise_as_the_plain_algorithm():
+    physics = mjcf.Physics.from_xml_string(BALL_CHAIN_XML)
+    arguments = dict(target_pos=[0.15, 0.1, 0.55], joint_names=["ball_2", "hinge", "ball_1"])
+    result = inverse_kinematics.qpos_from_site_pose(physics, "tip", **arguments)
+    assert result.success
+    _assert_same_bits(result, _reference_ik(physics, "tip", **arguments))
+
+
+@pytest.mark.parametrize("xml", [ARM_ON_FLOOR_XML, BALL_CHAIN_XML])
+def test_inplace_leaves_the_data_mj_fwd_position_gives_the_solution(xml):
+    physics = mjcf.Physics.from_xml_string(xml)
+    physics.data.qpos[:] = physics.model.qpos0
+    physics.data.qpos[0] = 0.2
+    site = physics.model.site(0).name
+    target = physics.data.site_xpos[0] + [0.05, 0.1, -0.05]
+    reference_data = _reference_ik(physics, site, target_pos=target)[-1]
+    result = inverse_kinematics.qpos_from_site_pose(physics, site, target_pos=target, inplace=True)
+    fresh = mujoco.MjData(physics.model.ptr)
+    fresh.qpos[:] = result.qpos
+    mujoco.mj_fwdPosition(physics.model.ptr, fresh)
+    data = physics.data.ptr
+    assert result.success and data.ncon > 0
+    for expected in (fresh, reference_data):
+        assert data.ncon == expected.ncon and data.nefc == expected.nefc
+        for field in ("qpos", "xpos", "xmat", "site_xpos", "cdof", "M", "qLD", "efc_pos"):
+            assert getattr(data, field).tobytes() == getattr(expected, field).tobytes(), field
+        assert data.contact.pos.tobytes() == expected.contact.pos.tobytes()
+
+
+def test_a_joint_that_cannot_move_the_site_stops_at_once_without_warnings(recwarn):
+    # The site lies on the hinge's axis: its Jacobian and so its step are exactly zero.
+    physics = mjcf.Physics.from_xml_string(
+        '<mujoco><worldbody><body><joint name="spin" axis="0 0 1"/><geom size="0.1"/>'
+        '<site name="centre"/></body></worldbody></mujoco>'
+    )
+    result = inverse_kinematics.qpos_from_site_pose(physics, "centre", target_pos=[0.3, 0, 0])
+    assert (result.steps, result.success, result.err_norm) == (0, False, 0.3)
+    np.testing.assert_array_equal(result.qpos, [0.0])
+    assert not [w for w in recwarn if issubclass(w.category, RuntimeWarning)]
