@@ -331,9 +331,8 @@ class Element:
         """Called after `array`, this element's value of `xml_name`, was written in place."""
         if self._attributes.get(xml_name) is not array:
             return
-        spec = self._spec.attributes[xml_name]
         if xml_name in self._texts:
-            self._texts[xml_name] = attribute_types.xml_text(xml_name, spec.type, array)
+            self._texts[xml_name] = None  # formatted at the next write (see `_set_attribute`)
         _set_slot(self, "_xml_cache", None)
         self._changed(xml_name)
 
@@ -343,6 +342,12 @@ class Element:
         All or nothing: when one value is rejected, the attributes already set by this call
         get their previous values back before the error propagates.
         """
+        if len(attributes) == 1:
+            # One attribute (a variator's colour at every reset): nothing to roll back.
+            ((name, value),) = attributes.items()
+            self._set_attribute(name, value)
+            self._changed(self._spec.python_attributes[name].name)
+            return
         done = []
         try:
             for name, value in attributes.items():
@@ -395,9 +400,10 @@ class Element:
         elif kind == attribute_types.FILE and isinstance(converted, str):
             converted = self._load_file(name, converted)
         elif kind == attribute_types.STRING or kind == attribute_types.OTHER:
-            # Formatted now at full precision, so that writing XML only joins text. `_texts`
-            # holds exactly the plain (string and other) attributes, in `_attributes` order.
-            self._texts[xml_name] = attribute_types.xml_text(xml_name, spec.type, converted)
+            # `_texts` holds exactly the plain (string and other) attributes, in `_attributes`
+            # order: their full-precision text, or None until the next write formats it
+            # (`xml_writer.plain_text`), as an attribute set at every reset is seldom written.
+            self._texts[xml_name] = None
         self._attributes[xml_name] = converted
         _set_slot(self, "_xml_cache", None)
 
