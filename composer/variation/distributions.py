@@ -93,10 +93,13 @@ class Distribution(base.Variation):
             args, kwargs = self._args, self._kwargs
         if initial_value is None:
             target_shape = None
-        elif type(initial_value) is np.ndarray:
-            target_shape = initial_value.shape
         else:
-            target_shape = np.shape(initial_value)
+            # `np.shape(initial_value)`, without its dispatch: a corruptor's distribution
+            # draws once per sample, for arrays that are often ndarray subclasses.
+            try:
+                target_shape = initial_value.shape
+            except AttributeError:
+                target_shape = np.asarray(initial_value).shape
         single_sample = self._single_sample
         size = None if single_sample else target_shape
         sampler = self._callable(np.random if random_state is None else random_state)
