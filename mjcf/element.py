@@ -401,9 +401,15 @@ class Element:
             converted = self._load_file(name, converted)
         elif kind == attribute_types.STRING or kind == attribute_types.OTHER:
             # `_texts` holds exactly the plain (string and other) attributes, in `_attributes`
-            # order: their full-precision text, or None until the next write formats it
-            # (`xml_writer.plain_text`), as an attribute set at every reset is seldom written.
-            self._texts[xml_name] = None
+            # order, with their full-precision text: formatted now for a new attribute (so
+            # that a model's first write only joins text), or None until the next write
+            # (`xml_writer.plain_text`) for one set again (a value set at every reset, as a
+            # variator's colour, is seldom written).
+            texts = self._texts
+            if xml_name in texts:
+                texts[xml_name] = None
+            else:
+                texts[xml_name] = attribute_types.xml_text(xml_name, spec.type, converted)
         self._attributes[xml_name] = converted
         _set_slot(self, "_xml_cache", None)
 
