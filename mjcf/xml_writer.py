@@ -329,7 +329,10 @@ class _Writer:
         if cache is not None and cache[_HEAD_PRECISION] == self.key:
             static = cache[_HEAD_STATIC]
         elif self.full_precision:
-            static = plain_text(element)
+            try:  # `plain_text(element)`, inline where every text is formatted already
+                static = "".join(plain.values())
+            except TypeError:
+                static = plain_text(element)
         else:
             static = self.static_text(element)
         # Attributes that are neither plain nor the name: references and files.
