@@ -247,7 +247,10 @@ class Entity(metaclass=abc.ABCMeta):
         """
         if quaternion is not None:
             quaternion = np.asarray(quaternion, dtype=np.float64)
-            quaternion = quaternion / np.linalg.norm(quaternion)
+            # np.linalg.norm's own arithmetic for a real array, without its dispatch (this
+            # runs at every reset of many tasks).
+            flat = quaternion.ravel(order="K")
+            quaternion = quaternion / np.sqrt(flat.dot(flat))
         free_joint = self._free_joint()
         if free_joint is not None:
             qpos = physics.bind(free_joint).qpos

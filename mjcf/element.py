@@ -331,9 +331,8 @@ class Element:
         """Called after `array`, this element's value of `xml_name`, was written in place."""
         if self._attributes.get(xml_name) is not array:
             return
-        spec = self._spec.attributes[xml_name]
         if xml_name in self._texts:
-            self._texts[xml_name] = attribute_types.xml_text(xml_name, spec.type, array)
+            self._texts[xml_name] = None  # formatted at the next write (see `_set_attribute`)
         _set_slot(self, "_xml_cache", None)
         self._changed(xml_name)
 
@@ -343,6 +342,12 @@ class Element:
         All or nothing: when one value is rejected, the attributes already set by this call
         get their previous values back before the error propagates.
         """
+        if len(attributes) == 1:
+            # One attribute (a variator's colour at every reset): nothing to roll back.
+            ((name, value),) = attributes.items()
+            self._set_attribute(name, value)
+            self._changed(self._spec.python_attributes[name].name)
+            return
         done = []
         try:
             for name, value in attributes.items():
@@ -395,9 +400,16 @@ class Element:
         elif kind == attribute_types.FILE and isinstance(converted, str):
             converted = self._load_file(name, converted)
         elif kind == attribute_types.STRING or kind == attribute_types.OTHER:
-            # Formatted now at full precision, so that writing XML only joins text. `_texts`
-            # holds exactly the plain (string and other) attributes, in `_attributes` order.
-            self._texts[xml_name] = attribute_types.xml_text(xml_name, spec.type, converted)
+            # `_texts` holds exactly the plain (string and other) attributes, in `_attributes`
+            # order, with their full-precision text: formatted now for a new attribute (so
+            # that a model's first write only joins text), or None until the next write
+            # (`xml_writer.plain_text`) for one set again (a value set at every reset, as a
+            # variator's colour, is seldom written).
+            texts = self._texts
+            if xml_name in texts:
+                texts[xml_name] = None
+            else:
+                texts[xml_name] = attribute_types.xml_text(xml_name, spec.type, converted)
         self._attributes[xml_name] = converted
         _set_slot(self, "_xml_cache", None)
 

@@ -95,6 +95,25 @@ _set_text_cache = Element.__dict__["_text_cache"].__set__
 _escape = attribute_types.escape
 
 
+def plain_text(element: Element) -> str:
+    """The full-precision text of `element`'s plain attributes, in the order of its
+    `_attributes`.
+
+    `Element._texts` holds exactly the plain attributes, each with its text or None when
+    it was set since the last write: those are formatted here, once, and kept.
+    """
+    texts = element._texts
+    try:
+        return "".join(texts.values())
+    except TypeError:  # some text is None: not formatted yet
+        specs = element._spec.attributes
+        attributes = element._attributes
+        for name, text in texts.items():
+            if text is None:
+                texts[name] = attribute_types.xml_text(name, specs[name].type, attributes[name])
+        return "".join(texts.values())
+
+
 def _worth_writing(element: Element) -> bool:
     """Whether `element` changes the compiled model: empty settings singletons do not."""
     spec = element._spec
@@ -183,9 +202,7 @@ class _Writer:
         if cache is not None and cache[_HEAD_PRECISION] == self.key:
             return cache[_HEAD_STATIC]
         if self.full_precision:
-            # `_texts` holds the full-precision text of exactly the plain attributes, in the
-            # order of `_attributes` (Element keeps both in step).
-            static = "".join(element._texts.values())
+            static = plain_text(element)
         else:
             specs = element._spec.attributes
             plain = element._texts
@@ -312,7 +329,10 @@ class _Writer:
         if cache is not None and cache[_HEAD_PRECISION] == self.key:
             static = cache[_HEAD_STATIC]
         elif self.full_precision:
-            static = "".join(plain.values())
+            try:  # `plain_text(element)`, inline where every text is formatted already
+                static = "".join(plain.values())
+            except TypeError:
+                static = plain_text(element)
         else:
             static = self.static_text(element)
         # Attributes that are neither plain nor the name: references and files.

@@ -26,7 +26,7 @@ from mujoco_physics.rendering import (
     Contexts,
     Renderers,
 )
-from mujoco_physics.wrapper.core import MjData, MjModel, enable_timer, flags_set
+from mujoco_physics.wrapper.core import MjData, MjModel, enable_timer
 
 if TYPE_CHECKING:
     from mujoco_physics.reset_state import ResetState
@@ -112,6 +112,49 @@ class _Simulation:
         if self.raise_on_warnings:
             raise PhysicsError(message)
         logging.warning(message)
+
+
+class _ResetContext:
+    """`Physics.reset_context()`: a class rather than a generator, as it runs at every
+    reset (a generator-based context manager costs several times more to enter and exit)."""
+
+    __slots__ = ("_physics", "_reset_state")
+
+    def __init__(self, physics: "Physics", reset_state: "ResetState | None"):
+        self._physics = physics
+        self._reset_state = reset_state
+
+    def __enter__(self) -> "Physics":
+        physics = self._physics
+        try:
+            if self._reset_state is None:
+                physics.reset()
+            else:
+                self._reset_state.reset(physics)
+        except PhysicsError:
+            pass
+        return physics
+
+    def __exit__(self, kind, value, traceback) -> None:
+        if kind is None:
+            self._physics.after_reset()
+
+
+class _ErrorsSuppressed:
+    """`Physics.suppress_physics_errors()`, as a class for the reason `_ResetContext` is."""
+
+    __slots__ = ("_sim", "_previous")
+
+    def __init__(self, sim: _Simulation):
+        self._sim = sim
+
+    def __enter__(self) -> None:
+        sim = self._sim
+        self._previous = sim.raise_on_warnings
+        sim.raise_on_warnings = False
+
+    def __exit__(self, kind, value, traceback) -> None:
+        self._sim.raise_on_warnings = self._previous
 
 
 class Physics:
@@ -306,11 +349,19 @@ class Physics:
 
     def after_reset(self) -> None:
         """Runs forward with actuation disabled (no meaningful controls exist yet)."""
-        with flags_set(self._sim.opt, "disableflags", _ACTUATION_DISABLED):
-            self._sim.forward()
+        # What `wrapper.core.flags_set` does, without a generator: this runs at every reset.
+        sim = self._sim
+        opt = sim.opt
+        previous = opt.disableflags
+        opt.disableflags = previous | _ACTUATION_DISABLED
+        try:
+            sim.forward()
+        finally:
+            opt.disableflags = previous
 
-    @contextlib.contextmanager
-    def reset_context(self, *, reset_state: "ResetState | None" = None) -> Iterator["Physics"]:
+    def reset_context(
+        self, *, reset_state: "ResetState | None" = None
+    ) -> contextlib.AbstractContextManager["Physics"]:
         """Resets, yields this Physics for setting the initial state, then runs forward.
 
         A PhysicsError from the reset itself is ignored (the state is about to be set);
@@ -320,15 +371,7 @@ class Physics:
           reset_state: a `ResetState` that resets in place of `reset()`, copying the data
             of its last reset while that is exact (see `mujoco_physics.reset_state`).
         """
-        try:
-            if reset_state is None:
-                self.reset()
-            else:
-                reset_state.reset(self)
-        except PhysicsError:
-            pass
-        yield self
-        self.after_reset()
+        return _ResetContext(self, reset_state)
 
     def copy_data_from(self, data: mujoco.MjData) -> None:
         """Copies `data`, an MjData of this Physics' model, into this Physics' data in place
@@ -355,16 +398,9 @@ class Physics:
         if sim.warnings.tobytes() != before:
             sim.report_warnings(before)
 
-    @contextlib.contextmanager
-    def suppress_physics_errors(self) -> Iterator[None]:
+    def suppress_physics_errors(self) -> contextlib.AbstractContextManager[None]:
         """Inside the block, divergence warnings are logged instead of raised."""
-        sim = self._sim
-        previous = sim.raise_on_warnings
-        sim.raise_on_warnings = False
-        try:
-            yield
-        finally:
-            sim.raise_on_warnings = previous
+        return _ErrorsSuppressed(self._sim)
 
     def enable_profiling(self) -> None:
         """Turns on MuJoCo's timers (`data.timer`), as `wrapper.enable_timer(True)`."""

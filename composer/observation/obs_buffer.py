@@ -95,12 +95,22 @@ class Buffer:
         self._dtype = np.dtype(dtype)
         self._strip = bool(strip_singleton_buffer_dim) and self._size == 1
         self._shape = self._sample_shape if self._strip else (self._size,) + self._sample_shape
-        self._awaiting_initial_value = bool(pad_with_initial_value)
-        self._last_timestamp = -np.inf
+        self._pad = bool(pad_with_initial_value)
         # All retained samples, delivered or not, sit in a ring in arrival order: the oldest
         # at `_next` (the slot the next sample overwrites), the newest just before it.
         # Padding entries arrive at -inf. The ring grows when delays keep samples in flight.
         self._values = np.zeros((self._size,) + self._sample_shape, self._dtype)
+        self.clear()
+
+    def clear(self) -> None:
+        """Empties the buffer: it is then as a new one of the same size, sample shape and
+        options (arrays that `read` returned are the caller's, and stay as they are)."""
+        self._awaiting_initial_value = self._pad
+        self._last_timestamp = -np.inf
+        if len(self._values) == self._size:
+            self._values.fill(0)
+        else:  # the ring grew
+            self._values = np.zeros((self._size,) + self._sample_shape, self._dtype)
         self._arrivals = [-np.inf] * self._size
         self._next = 0
 

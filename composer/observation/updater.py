@@ -172,9 +172,10 @@ class _EnabledObservable:
         """Starts a new episode with the same options: makes the calls into the observable
         that construction makes, in its order, and empties the buffer.
 
-        Returns whether the buffer kept its kind and storage: False when a sample's shape or
-        dtype changed, the buffer then being new (its direct sampling is to be set up again).
-        A kept `LatestSampleBuffer` is not cleared: the reset's first sample overwrites it.
+        Returns whether the buffer is the same object, emptied: False when a sample's shape
+        or dtype changed, the buffer then being new (its direct sampling and reader are to be
+        set up again). A kept `LatestSampleBuffer` is not cleared: the reset's first sample
+        overwrites it.
         """
         shape, dtype = self._bind(physics, random_state)
         if (shape, np.dtype(dtype)) != self._sample_spec:
@@ -183,7 +184,7 @@ class _EnabledObservable:
         self._schedule = []
         self._last_scheduled = 0
         if not self.keeps_one_sample:
-            self.buffer = obs_buffer.Buffer(self.buffer_size, shape, dtype, pad, strip)
+            self.buffer.clear()
         return True
 
     @staticmethod
@@ -517,7 +518,7 @@ class Updater:
                         self._pad_with_initial_value,
                     )
             if rebound:
-                self._readers = [self._reader(d) for d in self._enabled_dicts()]
+                # The same buffers, emptied: the readers of the last reset read them.
                 self._start_episode()
                 return
             structure = self._enabled_structure
@@ -637,7 +638,7 @@ class Updater:
         physics and the random state, what the structure `reset` builds depends on, besides
         sampled shapes."""
         return [
-            (name, observable, *_OPTIONS(observable))
+            (name, observable) + _OPTIONS(observable)
             for d in (self._observables if self._is_nested else [self._observables])
             for name, observable in d.items()
             if observable.enabled

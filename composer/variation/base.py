@@ -86,14 +86,16 @@ def evaluate(structure, *args, **kwargs):
     kind = type(structure)
     if kind in _CONSTANTS:
         return structure
-    if isinstance(structure, Variation):
-        return structure(*args, **kwargs)
+    # The exact container types first: none of them is a Variation, and they skip the
+    # (slower) abstract `isinstance` check.
+    if kind is tuple:
+        return tuple([evaluate(item, *args, **kwargs) for item in structure])
     if kind is list:
         return [evaluate(item, *args, **kwargs) for item in structure]
-    if kind is tuple:
-        return tuple(evaluate(item, *args, **kwargs) for item in structure)
     if kind is dict:
         return {key: evaluate(value, *args, **kwargs) for key, value in structure.items()}
+    if isinstance(structure, Variation):
+        return structure(*args, **kwargs)
     if isinstance(structure, tuple) and hasattr(structure, "_fields"):
         return kind(*(evaluate(item, *args, **kwargs) for item in structure))
     if isinstance(structure, (list, tuple)):

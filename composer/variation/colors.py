@@ -14,10 +14,24 @@ import numpy as np
 from composer.variation import base
 
 
+def _evaluated(values: tuple, random_state) -> list:
+    """`base.evaluate(values, random_state=random_state)` for a tuple of channels, as a list:
+    each variation among them is called with the random state alone."""
+    return [
+        value(random_state=random_state)
+        if isinstance(value, base.Variation)
+        else base.evaluate(value, random_state=random_state)
+        for value in values
+    ]
+
+
 def _channels(owner: str, names: tuple[str, ...], values) -> list[float]:
     channels = []
     for name, value in zip(names, values):
-        if isinstance(value, float):  # what a distribution draws: a single number already
+        if type(value) is float:  # what a distribution draws: a single number already
+            channels.append(value)
+            continue
+        if isinstance(value, float):
             channels.append(float(value))
             continue
         array = np.asarray(value, dtype=np.float64)
@@ -39,7 +53,7 @@ class RgbVariation(base.Variation):
         self._values = (r, g, b, alpha)
 
     def __call__(self, initial_value=None, current_value=None, random_state=None):
-        values = base.evaluate(self._values, random_state=random_state)
+        values = _evaluated(self._values, random_state)
         return np.array(_channels(type(self).__name__, self._NAMES, values))
 
     def __repr__(self):
@@ -56,7 +70,7 @@ class HsvVariation(base.Variation):
         self._values = (h, s, v, alpha)
 
     def __call__(self, initial_value=None, current_value=None, random_state=None):
-        values = base.evaluate(self._values, random_state=random_state)
+        values = _evaluated(self._values, random_state)
         h, s, v, alpha = _channels(type(self).__name__, self._NAMES, values)
         return np.array([*colorsys.hsv_to_rgb(h, s, v), alpha])
 

@@ -93,12 +93,16 @@ class Distribution(base.Variation):
             args, kwargs = self._args, self._kwargs
         if initial_value is None:
             target_shape = None
-        elif type(initial_value) is np.ndarray:
-            target_shape = initial_value.shape
         else:
-            target_shape = np.shape(initial_value)
-        size = None if self._single_sample else target_shape
-        sampler = self._callable(_random_state(random_state))
+            # `np.shape(initial_value)`, without its dispatch: a corruptor's distribution
+            # draws once per sample, for arrays that are often ndarray subclasses.
+            try:
+                target_shape = initial_value.shape
+            except AttributeError:
+                target_shape = np.asarray(initial_value).shape
+        single_sample = self._single_sample
+        size = None if single_sample else target_shape
+        sampler = self._callable(np.random if random_state is None else random_state)
         try:
             sample = sampler(*args, size=size, **kwargs)
         except ValueError as error:
@@ -106,7 +110,7 @@ class Distribution(base.Variation):
                 f"{_describe(type(self).__name__, args, kwargs)}: cannot draw samples of shape "
                 f"{size}: {error}"
             ) from error
-        if self._single_sample and target_shape is not None and np.shape(sample) != target_shape:
+        if single_sample and target_shape is not None and np.shape(sample) != target_shape:
             try:
                 if np.broadcast_shapes(np.shape(sample), target_shape) == target_shape:
                     return np.broadcast_to(sample, target_shape).copy()

@@ -35,7 +35,9 @@ class Additive(_Noise):
     """Adds the value of `variation` to the initial value (to the current one if `cumulative`)."""
 
     def __call__(self, initial_value=None, current_value=None, random_state=None):
-        value = self._base_value(initial_value, current_value)
+        value = current_value if self._cumulative else initial_value
+        if value is None:
+            self._base_value(initial_value, current_value)  # raises, naming what is missing
         return value + self._draw(initial_value, current_value, random_state)
 
 
@@ -43,5 +45,7 @@ class Multiplicative(_Noise):
     """Multiplies the initial value (the current one if `cumulative`) by `variation`'s value."""
 
     def __call__(self, initial_value=None, current_value=None, random_state=None):
-        value = self._base_value(initial_value, current_value)
+        value = current_value if self._cumulative else initial_value
+        if value is None:
+            self._base_value(initial_value, current_value)  # raises, naming what is missing
         return value * self._draw(initial_value, current_value, random_state)

@@ -5,7 +5,7 @@ from __future__ import annotations
 import dataclasses
 from typing import NamedTuple
 
-__all__ = ["ElementsUsing", "SizePatchCache", "SpringdamperScan"]
+__all__ = ["ElementsUsing", "FieldTarget", "SizePatchCache", "SpringdamperScan"]
 
 
 class SpringdamperScan(NamedTuple):
@@ -20,6 +20,17 @@ class ElementsUsing(NamedTuple):
 
     modification_count: int
     elements: list
+
+
+class FieldTarget(NamedTuple):
+    """Where an element's attribute compiles to: `array[index]`, of `shape` and `size`, in
+    the compiled model `model` (the array being a view of that model's memory)."""
+
+    model: object
+    array: object
+    index: object
+    shape: tuple
+    size: int
 
 
 @dataclasses.dataclass
@@ -39,6 +50,8 @@ class SizePatchCache:
       copies: the bodies' geoms and settings -> their `BodyCopies`.
       object_ids: element whose attribute `mjcf.patching.model_patch` wrote -> its compiled id,
         None where it has none.
+      field_targets: (element, XML attribute) that `mjcf.patching.model_patch` wrote -> its
+        `FieldTarget` in the compiled model, None where it has none.
       elements_using: (default template, XML attribute) -> the `ElementsUsing` it.
     """
 
@@ -47,4 +60,5 @@ class SizePatchCache:
     springdamper: SpringdamperScan | None = None
     copies: dict = dataclasses.field(default_factory=dict)
     object_ids: dict = dataclasses.field(default_factory=dict)
+    field_targets: dict = dataclasses.field(default_factory=dict)
     elements_using: dict = dataclasses.field(default_factory=dict)

@@ -42,7 +42,7 @@ import numpy as np
 from mjcf import attribute_types, binding, traversal_utils
 from mjcf.element import Element
 from mjcf.patching import geom_size_patch, model_statistics, patch_table
-from mjcf.patching.geom_size_cache import ElementsUsing, SizePatchCache
+from mjcf.patching.geom_size_cache import ElementsUsing, FieldTarget, SizePatchCache
 from mujoco_physics.field_layout import MODEL
 
 __all__ = ["patch_supported", "patch_model"]
@@ -68,6 +68,8 @@ _POSE = ("pos", "quat")
 _SEGMENT = "fromto"
 # The attributes that decide which default classes an element takes.
 _CLASS_ATTRIBUTES = ("class", "childclass")
+# `SizePatchCache.field_targets` has no entry yet.
+_UNKNOWN = object()
 
 
 def patch_supported() -> bool:
@@ -198,11 +200,37 @@ def _elements_using(template, xml_name: str, cache: SizePatchCache) -> list:
 
 
 def _write_for(physics, element, xml_name: str, cache: SizePatchCache) -> _Write | None:
-    """The field write that gives `element`'s compiled value of `xml_name`, or None; the
-    element's compiled id is looked up once per compiled model (`cache.object_ids`)."""
+    """The field write that gives `element`'s compiled value of `xml_name`, or None; where
+    it goes in the compiled model is looked up once per model (`cache.field_targets`)."""
     source = traversal_utils.default_value_source(element, xml_name)
     if source is None:
         return None
+    model = physics.model.ptr
+    key = (element, xml_name)
+    target = cache.field_targets.get(key, _UNKNOWN)
+    if target is _UNKNOWN or (target is not None and target.model is not model):
+        target = cache.field_targets[key] = _field_target(physics, element, xml_name, cache)
+    if target is None:
+        return None
+    object_id = cache.object_ids[element]
+    value = np.asarray(source._attributes[xml_name], dtype=np.float64)
+    # As many numbers as the field holds for the object: MuJoCo fills in missing ones.
+    if value.size != target.size:
+        return None
+    if xml_name == "quat" and any(_resolves(element, name) for name in _ORIENTATIONS):
+        return None  # the compiler refuses a second orientation
+    if xml_name in _POSE and _pose_needs_a_compile(physics, element, object_id):
+        return None
+    if xml_name in _UNIT_VECTORS:
+        value = _unit_vector(value)
+        if value is None:
+            return None
+    return _Write(target.array, target.index, value.reshape(target.shape))
+
+
+def _field_target(physics, element, xml_name: str, cache: SizePatchCache) -> FieldTarget | None:
+    """Where `element`'s `xml_name` compiles to in `physics`'s model, or None where a patch
+    cannot write it; the element's compiled id is kept in `cache.object_ids`."""
     if element._spec.attributes[xml_name].type.kind != attribute_types.OTHER:
         return None
     ref = binding.compiled_field(element, xml_name)
@@ -218,22 +246,11 @@ def _write_for(physics, element, xml_name: str, cache: SizePatchCache) -> _Write
     object_id = cache.object_ids[element]
     if object_id is None:
         return None
-    array = getattr(physics.model.ptr, ref.name)
+    model = physics.model.ptr
+    array = getattr(model, ref.name)
     index = layout.single_index(ref.addressing, object_id)
-    value = np.asarray(source._attributes[xml_name], dtype=np.float64)
     target = array[index]
-    # As many numbers as the field holds for the object: MuJoCo fills in missing ones.
-    if value.size != np.size(target):
-        return None
-    if xml_name == "quat" and any(_resolves(element, name) for name in _ORIENTATIONS):
-        return None  # the compiler refuses a second orientation
-    if xml_name in _POSE and _pose_needs_a_compile(physics, element, object_id):
-        return None
-    if xml_name in _UNIT_VECTORS:
-        value = _unit_vector(value)
-        if value is None:
-            return None
-    return _Write(array, index, value.reshape(np.shape(target)))
+    return FieldTarget(model, array, index, np.shape(target), np.size(target))
 
 
 def _unit_vector(value: np.ndarray) -> np.ndarray | None:
