@@ -112,3 +112,20 @@ def test_numpy_functions_that_only_read_leave_element_unmodified():
     assert float(np.sum(geom.rgba)) == 2.0
     assert np.concatenate([geom.rgba, geom.rgba]).shape == (8,)
     assert root.modification_count == before
+
+
+def test_writes_that_leave_the_value_as_it_was_are_not_modifications():
+    # dm_control's Duplo writes its stud radius in place at every reset, the same value
+    # unless the brick varies: nothing a compile sees has changed, so nothing is to patch.
+    root, geom = _model_with_geom()
+    geom.rgba[0] = 1.0  # the first read swaps in the writable copy; this write keeps 1
+    before = root.modification_count
+    geom.rgba[3] = 1.0
+    geom.size[:] = [0.1]
+    np.multiply(geom.rgba, 1.0, out=geom.rgba)
+    geom.rgba[1:3].fill(0.0)
+    assert root.modification_count == before
+    assert root.attribute_changes_since(before) == ()
+    geom.rgba[2:].fill(0.5)
+    assert root.attribute_changes_since(before) == ((geom, "rgba"),)
+    assert 'rgba="1 0 0.5 0.5"' in geom.to_xml_string()
