@@ -224,8 +224,9 @@ class PropPlacer(initializer.Initializer):
                 # are read (dm_control's bindings do the same, and the next step goes on
                 # from this forward's results).
                 physics.forward()
-            max_qvel = np.max(np.abs(data.qvel[prop_dofs]), initial=0.0)
-            max_qacc = np.max(np.abs(data.qacc[prop_dofs]), initial=0.0)
+            # np.abs(...).max(): np.max's dispatch costs more than the few numbers it reads.
+            max_qvel = np.abs(data.qvel[prop_dofs]).max() if prop_dofs.size else 0.0
+            max_qacc = np.abs(data.qacc[prop_dofs]).max() if prop_dofs.size else 0.0
             if (
                 max_qvel < self._max_qvel_tol
                 and max_qacc < self._max_qacc_tol
