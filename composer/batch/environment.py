@@ -443,6 +443,8 @@ class BatchEnvironment:
     @property
     def random_states(self) -> list[np.random.RandomState]:
         """Each world's random generator (drawn from by the initial-state producers)."""
+        if self._slots is not None:
+            self._slots.sync_generators()
         return self._random_states
 
     @property

@@ -12,7 +12,11 @@ variations) is therefore the CPU task's by construction.
 A `StateProducer` runs makers on worker threads (one maker each) or worker processes (each
 builds its own task from a picklable `task_factory`). A job is one world's next episodes,
 drawn in order from that world's generator, which travels with the job and comes back
-advanced, so a seed fixes every world's episodes whatever the number of workers.
+advanced (as its state), so a seed fixes every world's episodes whatever the number of
+workers. A worker's share of jobs comes back as one `ProducedStates`, a few stacked arrays:
+what the caller's process receives from a worker process is a handful of buffers, whatever
+the number of states (unpickling a state and a `RandomState` per episode cost the stepping
+process about a third of a millisecond per state, measured on the development machine).
 """
 
 import concurrent.futures
@@ -29,7 +33,14 @@ import mjcf
 from composer.batch.variations import EpisodeModel, model_arrays
 from composer.hooks import EnvironmentHooks
 
-__all__ = ["InitialState", "Job", "JobResult", "StateMaker", "StateProducer", "Submitted"]
+__all__ = [
+    "InitialState",
+    "Job",
+    "ProducedStates",
+    "StateMaker",
+    "StateProducer",
+    "Submitted",
+]
 
 _STATE_SPEC = mujoco.mjtState.mjSTATE_INTEGRATION
 
@@ -53,20 +64,41 @@ class InitialState(NamedTuple):
 
 
 class Job(NamedTuple):
-    """Make the initial states of `episodes` of world `world` from `random_state`."""
+    """Make the initial states of `episodes` of world `world` from `random_state`: the
+    world's `np.random.RandomState`, which a worker thread draws from in place, or its
+    `get_state()`, from which a worker process draws, sending back the state after
+    (`ProducedStates.generators`). A generator's state pickles in about 10 µs, where a
+    `RandomState` takes a quarter of a millisecond, and NumPy's `get_state` and `set_state`
+    about 0.1 ms each (measured on the development machine), so the stepping process
+    converts a world's generator only on its first job, and sets it only when asked
+    (`StateSlots.sync_generators`)."""
 
     world: int
     episodes: tuple[int, ...]
-    random_state: np.random.RandomState
+    random_state: np.random.RandomState | tuple
 
 
-class JobResult(NamedTuple):
-    """The states of a `Job`, and its world's generator after drawing them."""
+class ProducedStates(NamedTuple):
+    """The initial states of some jobs, one row per state, in the jobs' order.
 
-    world: int
-    episodes: tuple[int, ...]
-    states: list[InitialState]
-    random_state: np.random.RandomState
+    Attributes:
+      worlds: int64 (states,): the world of each state.
+      episodes: int64 (states,): the episode of its world each state starts.
+      state: float64 (states, state size): the `mj_getState(mjSTATE_INTEGRATION)` vectors.
+      model_rows: field name -> (states, *a world's row shape), the field's dtype.
+      values: name -> float32 (states, *value shape): the `BatchTask.initial_values`.
+      shared: as `InitialState.shared`, the same for every state of one maker.
+      generators: per job that came with a generator's state (not a `RandomState`), its
+        world and its generator's state after drawing the job's episodes.
+    """
+
+    worlds: np.ndarray
+    episodes: np.ndarray
+    state: np.ndarray
+    model_rows: dict[str, np.ndarray]
+    values: dict[str, np.ndarray]
+    shared: dict[str, np.ndarray]
+    generators: list[tuple[int, tuple]]
 
 
 class StateMaker:
@@ -111,6 +143,7 @@ class StateMaker:
         }
         self._reference = model_arrays(model)
         self._shared: dict[str, np.ndarray] | None = None
+        self._scratch_generator: np.random.RandomState | None = None
 
     def __call__(self, random_state: np.random.RandomState) -> InitialState:
         """Runs the initializers with `random_state` and records the state they set."""
@@ -157,10 +190,36 @@ class StateMaker:
             shared=self._shared,
         )
 
-    def run(self, job: Job) -> JobResult:
-        """The states of every episode of `job`, in order."""
-        states = [self(job.random_state) for _ in job.episodes]
-        return JobResult(job.world, job.episodes, states, job.random_state)
+    def run(self, jobs: Sequence[Job]) -> ProducedStates:
+        """The states of every episode of `jobs`, in order, stacked (at least one state)."""
+        worlds, episodes, states, generators = [], [], [], []
+        for job in jobs:
+            random_state = job.random_state
+            if not isinstance(random_state, np.random.RandomState):
+                if self._scratch_generator is None:
+                    self._scratch_generator = np.random.RandomState()
+                random_state = self._scratch_generator
+                random_state.set_state(job.random_state)
+            for episode in job.episodes:
+                states.append(self(random_state))
+                worlds.append(job.world)
+                episodes.append(episode)
+            if random_state is not job.random_state:
+                generators.append((job.world, random_state.get_state()))
+        return ProducedStates(
+            worlds=np.asarray(worlds, np.int64),
+            episodes=np.asarray(episodes, np.int64),
+            state=np.stack([state.state for state in states]),
+            model_rows=_stacked([state.model_rows for state in states]),
+            values=_stacked([state.values for state in states]),
+            shared=states[0].shared,
+            generators=generators,
+        )
+
+
+def _stacked(rows: list[dict[str, np.ndarray]]) -> dict[str, np.ndarray]:
+    """name -> (len(rows), *shape): each row's arrays stacked."""
+    return {name: np.stack([row[name] for row in rows]) for name in rows[0]}
 
 
 def build_maker(
@@ -186,8 +245,8 @@ def _start_process(task_factory, batch_task_type, model_fields, host_fields) -> 
     _process_maker = build_maker(task_factory, batch_task_type, model_fields, host_fields)
 
 
-def _run_in_process(jobs: list[Job]) -> list[JobResult]:
-    return [_process_maker.run(job) for job in jobs]
+def _run_in_process(jobs: list[Job]) -> ProducedStates:
+    return _process_maker.run(jobs)
 
 
 class StateProducer:
@@ -226,6 +285,8 @@ class StateProducer:
                 "the CPU task) to build their own task"
             )
         self.workers = workers
+        #: Whether the workers are processes (jobs then carry generator states).
+        self.in_processes = processes
         if processes:
             self._pool = concurrent.futures.ProcessPoolExecutor(
                 workers,
@@ -244,11 +305,11 @@ class StateProducer:
             free = list(makers)
             lock = threading.Lock()
 
-            def run(jobs: list[Job]) -> list[JobResult]:
+            def run(jobs: list[Job]) -> ProducedStates:
                 with lock:
                     own = free.pop()
                 try:
-                    return [own.run(job) for job in jobs]
+                    return own.run(jobs)
                 finally:
                     with lock:
                         free.append(own)
@@ -259,7 +320,8 @@ class StateProducer:
             self._run = run
 
     def submit(self, jobs: Sequence[Job]) -> "Submitted":
-        """Starts `jobs` on the workers; the `Submitted`'s result lists every job's result.
+        """Starts `jobs` on the workers; the `Submitted`'s result is one `ProducedStates`
+        per worker's share.
 
         Jobs are split into one share per worker; a world's episodes stay in one job.
         """
@@ -282,11 +344,11 @@ class Submitted:
         """Whether every share has finished."""
         return all(future.done() for future in self._futures)
 
-    def result(self, timeout: float) -> list[JobResult]:
-        """Every job's result, waiting at most `timeout` seconds in all.
+    def result(self, timeout: float) -> list[ProducedStates]:
+        """Every share's states, waiting at most `timeout` seconds in all.
 
         Raises:
           TimeoutError: when the workers are not done by then; a worker's own error.
         """
         concurrent.futures.wait(self._futures, timeout)
-        return [result for future in self._futures for result in future.result(timeout=0)]
+        return [future.result(timeout=0) for future in self._futures]

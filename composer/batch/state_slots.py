@@ -28,7 +28,7 @@ from typing import NamedTuple
 import numpy as np
 
 from composer.batch import _warp, kernels
-from composer.batch.initial_states import Job, JobResult, StateProducer
+from composer.batch.initial_states import Job, ProducedStates, StateProducer
 
 __all__ = ["InitialStateStats", "StateSlots"]
 
@@ -110,6 +110,9 @@ class StateSlots:
         self._value_targets: dict = {}
         self.values: dict = {}
         self._pending = None
+        # World -> its generator's state from a worker process, not yet set on its
+        # `random_states` entry (see `sync_generators`).
+        self._generator_states: dict[int, tuple] = {}
         self._shared_written: dict[str, np.ndarray] | None = None
         self._warned = False
         self._steps = 0
@@ -140,12 +143,20 @@ class StateSlots:
         """Drops every prepared state and starts the worlds' streams anew from
         `random_states` (after a reseed)."""
         self._drop_pending()
+        self._generator_states.clear()
         self.random_states[:] = random_states
         self._counters.zero_()
         self._uploaded_on_device.zero_()
         self._clear_bookkeeping()
         self._control_steps = 0
         self._stats = InitialStateStats(0, 0, 0, 0.0)
+
+    def sync_generators(self) -> None:
+        """Sets each world's `random_states` entry to the state its worker process left it
+        in (process producers send generator states back, not generators)."""
+        for world, state in self._generator_states.items():
+            self.random_states[world].set_state(state)
+        self._generator_states.clear()
 
     def _drop_pending(self) -> None:
         if self._pending is not None:
@@ -250,9 +261,17 @@ class StateSlots:
         for world in np.flatnonzero(np.maximum(self._requested, started) < end):
             first = max(int(self._requested[world]), int(started[world]))
             episodes = tuple(range(first, int(end[world])))
-            jobs.append(Job(int(world), episodes, self.random_states[world]))
+            jobs.append(Job(int(world), episodes, self._generator(int(world))))
             self._requested[world] = end[world]
         return jobs
+
+    def _generator(self, world: int) -> np.random.RandomState | tuple:
+        """What a job of `world` draws from: its generator for thread workers, the
+        generator's latest state for worker processes."""
+        if not self._producer.in_processes:
+            return self.random_states[world]
+        state = self._generator_states.get(world)
+        return self.random_states[world].get_state() if state is None else state
 
     def _collect(self) -> None:
         """Waits for the pending jobs and uploads their states."""
@@ -261,7 +280,7 @@ class StateSlots:
         pending, self._pending = self._pending, None
         begin = time.perf_counter()
         done = pending.done()
-        results: list[JobResult] = pending.result(PRODUCER_TIMEOUT)
+        results: list[ProducedStates] = pending.result(PRODUCER_TIMEOUT)
         if not done:
             self._stats = self._stats._replace(
                 waits=self._stats.waits + 1,
@@ -270,31 +289,27 @@ class StateSlots:
         if results:
             self._upload(results)
 
-    def _upload(self, results: list[JobResult]) -> None:
+    def _upload(self, results: list[ProducedStates]) -> None:
         k = self.slots_per_world
-        self._allocate_values(results[0].states[0])
-        self._write_shared(results[0].states[0].shared)
-        rows, states = [], []
-        for result in results:
-            self.random_states[result.world] = result.random_state
-            for episode, state in zip(result.episodes, result.states):
-                if state.shared.keys() != self._shared_written.keys():
-                    raise RuntimeError(
-                        "initialize_episode changed different shared model fields in different "
-                        f"workers: {sorted(state.shared)} and {sorted(self._shared_written)}"
-                    )
-                rows.append(result.world * k + episode % k)
-                states.append(state)
-            self._uploaded[result.world] = max(
-                self._uploaded[result.world], result.episodes[-1] + 1
-            )
-        # One write per array for all the states (rows are distinct: a job asks for at most
-        # slots_per_world episodes of a world).
-        self._slot_states[1][rows] = np.stack([state.state for state in states])
-        for name, (_, host) in self._slot_rows.items():
-            host[rows] = np.stack([state.model_rows[name].ravel() for state in states])
-        for name, (_, host) in self._slot_values.items():
-            host[rows] = np.stack([state.values[name].ravel() for state in states])
+        first = results[0]
+        self._allocate_values(first.values)
+        self._write_shared(first.shared)
+        for produced in results:
+            if produced.shared.keys() != self._shared_written.keys():
+                raise RuntimeError(
+                    "initialize_episode changed different shared model fields in different "
+                    f"workers: {sorted(produced.shared)} and {sorted(self._shared_written)}"
+                )
+            self._generator_states.update(produced.generators)
+            # One write per array for each share's states (rows are distinct: a job asks
+            # for at most slots_per_world episodes of a world).
+            rows = produced.worlds * k + produced.episodes % k
+            self._slot_states[1][rows] = produced.state
+            for name, (_, host) in self._slot_rows.items():
+                host[rows] = produced.model_rows[name].reshape(rows.size, -1)
+            for name, (_, host) in self._slot_values.items():
+                host[rows] = produced.values[name].reshape(rows.size, -1)
+            np.maximum.at(self._uploaded, produced.worlds, produced.episodes + 1)
         self._uploaded_on_device.assign(self._uploaded.astype(np.int32))
         if self._physics.is_cuda:
             for array, host in (
@@ -304,17 +319,20 @@ class StateSlots:
             ):
                 array.assign(host)
 
-    def _allocate_values(self, state) -> None:
-        """Makes the device arrays of the episode values, from the first state's shapes."""
-        if self._slot_values or not state.values:
+    def _allocate_values(self, values: dict[str, np.ndarray]) -> None:
+        """Makes the device arrays of the episode values, from the shapes of the first
+        states' `values` (name -> (states, *value shape))."""
+        if self._slot_values or not values:
             return
         arrays = self._physics.arrays
         n, k = self._physics.num_envs, self.slots_per_world
-        for name, value in state.values.items():
-            self._slot_values[name] = self._host_backed((n * k, value.size))
-            target, view = arrays.empty((n, value.size), np.float32)
+        for name, stacked in values.items():
+            shape = stacked.shape[1:]
+            size = int(np.prod(shape))
+            self._slot_values[name] = self._host_backed((n * k, size))
+            target, view = arrays.empty((n, size), np.float32)
             self._value_targets[name] = target
-            self.values[name] = view.reshape((n, *value.shape))
+            self.values[name] = view.reshape((n, *shape))
 
     def _write_shared(self, shared: dict[str, np.ndarray]) -> None:
         if self._shared_written is not None:

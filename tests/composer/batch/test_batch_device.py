@@ -146,6 +146,11 @@ def test_processes_and_threads_make_the_same_initial_states():
             for key, value in a.observation.items():
                 np.testing.assert_array_equal(b.observation[key], value, err_msg=key)
         assert processes.initial_state_stats().reused == 0
+        # Worker processes send generator states back; each world's generator has drawn
+        # the same episodes as with threads.
+        for a, b in zip(threads.random_states, processes.random_states):
+            np.testing.assert_array_equal(b.get_state()[1], a.get_state()[1])
+            assert b.randint(2**31) == a.randint(2**31)
     finally:
         threads.close(), processes.close()
 
