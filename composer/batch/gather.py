@@ -7,11 +7,13 @@ joint's axis), a joint angle's sine and cosine. `ObservationGather` reads all of
 `FieldGather`s into a new block of device memory per read, so that a result the caller
 keeps is never written again (see `composer.batch.arrays`): with one launch of
 `kernels.gather_columns`, one thread per world, where task code runs in torch (CUDA, and
-`namespace="torch"` on Warp's CPU device); with one `numpy.take` per observable, written
-straight into the block, where it runs in NumPy (Warp's CPU device), because Warp's CPU
-kernels gather about six times slower than `numpy.take` (about 10 ns an entry against 1.5,
-measured on the development machine, 2026-11). Both execute the same plan, the
-`FieldGather`s' entries, weights and ops; the torch tests compare the two.
+`namespace="torch"` on Warp's CPU device); with a few NumPy calls per observable, written
+straight into the block, where it runs in NumPy (Warp's CPU device): a slice or a
+`numpy.take`, one BLAS product for weighted sums, sine and cosine of entries taken once
+(`_numpy_plan`), because Warp's CPU kernels gather about six times slower than
+`numpy.take` (about 10 ns an entry against 1.5, measured on the development machine,
+2026-11). Both execute the same plan, the `FieldGather`s' entries, weights and ops; the
+torch tests compare the two.
 
 Kernel blocks are cut from chunks of `ObservationGather.CHUNK_BYTES` (at least one read each):
 a chunk is allocated once per so many reads and stays alive while any of its reads is
@@ -19,7 +21,7 @@ referenced. The kernel reads the fields at the addresses they had when the gathe
 MuJoCo Warp's arrays are allocated once, with the data and the model.
 """
 
-from typing import Any
+from typing import Any, NamedTuple
 
 import numpy as np
 
@@ -79,11 +81,7 @@ class FieldGather:
         )
         self._plain = plain
         self._unit_weights = bool(np.all(self.weights == 1.0))
-        self._op_columns = [
-            (getattr(np, name), _as_slice(np.flatnonzero(self.ops == OPS[name])))
-            for name in ("sin", "cos")
-            if np.any(self.ops == OPS[name])
-        ]
+        self._numpy_plan = None if plain else _numpy_plan(self.entries, self.weights, self.ops)
         self._device_entries = physics.arrays.asarray(self.entries.ravel())
         self._device_weights = physics.arrays.asarray(self.weights)
         self._device_ops = physics.arrays.asarray(self.ops)
@@ -102,16 +100,30 @@ class FieldGather:
             else:  # a model field shared by every world
                 out[...] = flat[:, self.entries[:, 0]]
             return
-        if self.entries.shape[1] == 1:
-            summed = np.take(flat, self.entries[:, 0], axis=1)
-            if not self._unit_weights:
-                summed *= self.weights[:, 0]
-        else:
-            summed = np.einsum("wct,ct->wc", flat[:, self.entries], self.weights)
+        plan = self._numpy_plan
+        if isinstance(plan, _Product):
+            if flat.shape[0] == out.shape[0]:
+                np.dot(flat[:, plan.span], plan.matrix, out=out)
+            else:  # a model field shared by every world
+                out[...] = np.dot(flat[:, plan.span], plan.matrix)
+            return
+        if isinstance(plan, _Trigonometric):
+            sources = plan.sources
+            if isinstance(sources, slice):
+                values = np.ascontiguousarray(flat[:, sources])
+            else:
+                values = np.take(flat, sources, axis=1)
+            for function, columns, picks in plan.columns:
+                picked = values if picks is None else np.ascontiguousarray(values[:, picks])
+                # On contiguous values: NumPy's vectorised sin and cos skip strided ones.
+                out[:, columns] = picked if function is None else function(picked)
+            return
+        summed = np.einsum("wct,ct->wc", flat[:, self.entries], self.weights)
         out[...] = summed
-        for function, columns in self._op_columns:
-            # On contiguous values: NumPy's vectorised sin and cos skip strided ones.
-            out[:, columns] = function(np.ascontiguousarray(summed[:, columns]))
+        for name in ("sin", "cos"):
+            columns = np.flatnonzero(self.ops == OPS[name])
+            if columns.size:
+                out[:, columns] = getattr(np, name)(summed[:, columns])
 
     def __call__(self) -> Any:
         """The value in every world, (num_envs, *value shape), in the batch's namespace."""
@@ -131,6 +143,55 @@ class FieldGather:
                 xp.where(self._device_ops == OPS["cos"], xp.cos(taken), taken),
             )
         return xp.reshape(taken, (physics.num_envs, *self.shape))
+
+
+class _Product(NamedTuple):
+    """A reader of weighted sums as one BLAS product: value = row[span] @ matrix."""
+
+    span: slice
+    matrix: np.ndarray
+
+
+class _Trigonometric(NamedTuple):
+    """A reader of single entries, some through sin or cos: the `sources` entries of a
+    row are taken once; then each (function or None, output columns, picks among the
+    sources or None for all of them in order)."""
+
+    sources: slice | np.ndarray
+    columns: list[tuple[Any, slice | np.ndarray, slice | np.ndarray | None]]
+
+
+def _numpy_plan(entries, weights, ops) -> "_Product | _Trigonometric | None":
+    """How `FieldGather.take_into` reads a reader that is not a plain take, on NumPy.
+
+    Weighted sums without sin or cos whose entries cover a span of the row (a joint
+    torque: sensors' 3-vectors on the joints' axes) are one matrix product over the span,
+    three times faster than a gather and a sum at a thousand worlds (development machine);
+    every entry of the span belongs to the reader, so no other value enters a sum. Single
+    entries through sin and cos (joint angles) take their sources once. None: the general
+    gather, sum and ops.
+    """
+    if not ops.any():
+        low, high = int(entries.min()), int(entries.max()) + 1
+        if np.unique(entries).size == high - low:
+            matrix = np.zeros((high - low, entries.shape[0]), np.float32)
+            columns = np.broadcast_to(np.arange(entries.shape[0])[:, None], entries.shape)
+            np.add.at(matrix, (entries - low, columns), weights)
+            return _Product(slice(low, high), matrix)
+        return None
+    if entries.shape[1] != 1 or not np.all(weights == 1.0):
+        return None
+    sources = np.unique(entries[:, 0])
+    position = np.searchsorted(sources, entries[:, 0])
+    columns = []
+    for name, code in OPS.items():
+        chosen = np.flatnonzero(ops == code)
+        if chosen.size:
+            picks = position[chosen]
+            in_order = np.array_equal(picks, np.arange(sources.size))
+            function = None if name == "identity" else getattr(np, name)
+            columns.append((function, _as_slice(chosen), None if in_order else _as_slice(picks)))
+    return _Trigonometric(_as_slice(sources), columns)
 
 
 def _as_slice(columns: np.ndarray) -> slice | np.ndarray:

@@ -5,6 +5,7 @@ import numpy as np
 import pytest
 
 from composer.batch import batch_reader
+from composer.batch.gather import FieldGather, ObservationGather
 from composer.batch.observables import selection_reader
 from composer.observation import observable
 from manipulation import batch as manipulation_batch
@@ -90,3 +91,50 @@ def test_kernel_gathered_observations_of_earlier_steps_stay_as_they_were(monkeyp
     assert not np.array_equal(
         kept[1]["jaco_arm/joints_pos"].numpy(), kept[4]["jaco_arm/joints_pos"].numpy()
     )
+
+
+def _gathered(env, readers):
+    gather = ObservationGather(env.physics, readers)
+    if env.physics.arrays.library != "numpy":
+        pytest.skip(f"the NumPy reads need the NumPy namespace, not {env.physics.arrays.library}")
+    return {key: np.asarray(value, np.float64) for key, value in gather.read().items()}
+
+
+def test_weighted_sums_of_entries_read_as_the_sums_of_each_worlds_values(env):
+    physics = env.physics
+    qpos = np.asarray(physics.field("data", "qpos").view, np.float64)
+    weights = np.array([[1.0, -2.0, 0.5], [3.0, 0.25, -1.0]])
+    sums = FieldGather(physics, physics.field("data", "qpos"), [[0, 1, 2], [3, 4, 2]], weights)
+    # The same entry twice in one sum, and two sums sharing entries.
+    repeated = FieldGather(
+        physics, physics.field("data", "qpos"), [[1, 1], [0, 1]], [[0.5, 0.5], [2.0, -1.0]]
+    )
+    got = _gathered(env, {"sums": sums, "repeated": repeated})
+    expected = np.stack([qpos[:, [0, 1, 2]] @ weights[0], qpos[:, [3, 4, 2]] @ weights[1]], axis=1)
+    np.testing.assert_allclose(got["sums"], expected, rtol=1e-6, atol=1e-6)
+    np.testing.assert_allclose(
+        got["repeated"], np.stack([qpos[:, 1], 2 * qpos[:, 0] - qpos[:, 1]], 1), atol=1e-6
+    )
+
+
+def test_sines_and_cosines_of_entries_in_any_order_read_each_worlds_angles(env):
+    physics = env.physics
+    qpos = np.asarray(physics.field("data", "qpos").view, np.float64)
+    entries = [[5], [2], [5], [2], [7]]
+    ops = ["sin", "cos", "cos", "identity", "sin"]
+    got = _gathered(
+        env,
+        {"angles": FieldGather(physics, physics.field("data", "qpos"), entries, ops=ops)},
+    )["angles"]
+    expected = np.stack(
+        [
+            np.sin(qpos[:, 5]),
+            np.cos(qpos[:, 2]),
+            np.cos(qpos[:, 5]),
+            qpos[:, 2],
+            np.sin(qpos[:, 7]),
+        ],
+        axis=1,
+    )
+    assert len({tuple(row) for row in np.round(expected, 6)}) == NUM_ENVS  # worlds differ
+    np.testing.assert_allclose(got, expected, rtol=1e-6, atol=1e-6)
