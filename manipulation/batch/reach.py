@@ -2,6 +2,7 @@
 
 from composer import batch
 from composer.utils import rewards
+from manipulation.batch import vectors
 from manipulation.tasks import task_constants as tc
 from manipulation.tasks.reach import Reach
 
@@ -24,7 +25,7 @@ class BatchReach(batch.BatchTask):
 
     def get_reward(self, physics):
         xp = physics.xp
-        distance = xp.linalg.vector_norm(self._pinch.xpos - self._target.xpos, axis=-1)
+        distance = vectors.lengths(xp, self._pinch.xpos - self._target.xpos)
         return rewards.tolerance(
             distance, bounds=(0.0, tc.REACH_RADIUS), margin=tc.REACH_MARGIN, sigmoid="gaussian"
         )

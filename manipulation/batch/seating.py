@@ -1,6 +1,7 @@
 """How far entities are from their seats on others in every world: the batched twin of
 `manipulation.tasks.seating.SeatErrors`, for towers whose order may differ per world."""
 
+from manipulation.batch import vectors
 from manipulation.props import Duplo2x4
 
 
@@ -50,4 +51,4 @@ class SeatErrors:
             - _gather(xp, positions, lower)
             - self._seat_height * _gather(xp, z_axes, lower)
         )
-        return xp.linalg.vector_norm(offsets, axis=-1)
+        return vectors.lengths(xp, offsets)
