@@ -38,12 +38,21 @@ Baselines (`--baselines`), on this machine's cores: the threaded CPU vector env 
 sub-steps by nothing, so that a run long enough for episodes at their own length (300 steps:
 every world resets once) takes seconds; table 1 is then left out.
 
+`--producers-ahead`: the split's steps run while the producers are idle: every state the
+window's episodes start from is made before it (no refill during the window, whose
+`refill_interval` is set longer), episodes keep their natural length. The producers' pace
+is table 3's; on a host with few cores, producers at work during the window slow the
+step's own work as any other load does (on the development machine's 2 vCPUs an unrelated
+busy process slows NumPy's work on the other by 35-60%), which is the machine's, not the
+framework's, cost.
+
 Usage: python benchmarks/batch_env.py [--device cpu|cuda:0] [--num-envs 64,256]
   [--steps 50] [--tasks reach_site_features,lift_brick_features] [--namespace numpy|torch]
   [--episodes own,1] [--stagger] [--skip-physics] [--state-workers 1] [--state-processes]
-  [--baselines] [--producer-states 64]. On Warp's CPU device the default num_envs are 64
-  and 256 (a control step of 256 lift worlds takes about half a second there); the framework
-  fit there: `--skip-physics --episodes own --steps 300`.
+  [--baselines] [--producer-states 64] [--producers-ahead]. On Warp's CPU device the
+  default num_envs are 64 and 256 (a control step of 256 lift worlds takes about half a
+  second there); the framework fit there:
+  `--skip-physics --producers-ahead --episodes own --steps 300`.
 """
 
 import argparse
@@ -72,6 +81,7 @@ from composer import batch as composer_batch  # noqa: E402
 from composer.batch import initial_states, step_clock  # noqa: E402
 from manipulation import batch  # noqa: E402
 from manipulation.tasks import registry  # noqa: E402
+from manipulation.tasks import task_constants as tc  # noqa: E402
 
 # MuJoCo Warp's calls that start an episode (state copies, forward); the physics sub-steps
 # call others (step, step1, step2).
@@ -119,6 +129,7 @@ def _batch_row(task: str, num_envs: int, time_limit: float | None, args) -> dict
         check_action_values=False,
         state_workers=args.state_workers,
         state_processes=args.state_processes,
+        **(_states_ahead(task, time_limit, args.steps) if args.producers_ahead else {}),
         **options,
     )
     physics = env.physics
@@ -179,6 +190,15 @@ def _batch_row(task: str, num_envs: int, time_limit: float | None, args) -> dict
         reused=after.reused - before.reused,
     )
     return row
+
+
+def _states_ahead(task: str, time_limit: float | None, steps: int) -> dict:
+    """The slots and refill interval with which every episode of a window of `steps` (after
+    the three warm-up steps) starts from a state made before the window: no refill."""
+    seconds = tc.TIME_LIMIT if time_limit is None else time_limit
+    control_steps = round(seconds / registry.build_task(task).control_timestep)
+    episodes = -(-steps // max(control_steps, 1)) + 3  # and the warm-up's restarts
+    return {"slots_per_world": episodes, "refill_interval": steps + 8}
 
 
 def _raw_rate(physics, n_sub_steps: int, steps: int) -> float:
@@ -322,9 +342,14 @@ def main() -> None:
         "--state-processes", action="store_true", help="producers in processes, not threads"
     )
     parser.add_argument("--producer-states", type=int, default=64, help="states per timing")
+    parser.add_argument(
+        "--producers-ahead", action="store_true", help="the split's states made before it"
+    )
     args = parser.parse_args()
     if args.skip_physics and args.device != "cpu":
         parser.error("--skip-physics: Warp's CPU device only (a CUDA step replays graphs)")
+    if args.producers_ahead and not args.skip_physics:
+        parser.error("--producers-ahead: with --skip-physics only (one window of steps)")
     default_sizes = "64,256" if args.device == "cpu" else "1024,4096,8192"
     sizes = [int(n) for n in (args.num_envs or default_sizes).split(",")]
     tasks = args.tasks.split(",")
@@ -333,7 +358,9 @@ def main() -> None:
     print(
         f"producers {producers}, device {args.device}, namespace {args.namespace or 'default'}, "
         f"{args.steps} steps per row, starts {'staggered' if args.stagger else 'together'}, "
-        f"physics {'skipped' if args.skip_physics else 'on'}, {os.cpu_count()} cores, "
+        f"physics {'skipped' if args.skip_physics else 'on'}, "
+        f"producers {'idle (states made ahead)' if args.producers_ahead else 'at work'} in the "
+        f"split, {os.cpu_count()} cores, "
         f"load average {os.getloadavg()[0]:.2f}"
     )
     parts = " ".join(f"{short:>6}" for short in _SHORT.values())
