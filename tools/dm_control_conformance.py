@@ -284,6 +284,13 @@ def copy_tests(python: Path, packages: tuple[str, ...] = TESTED_PACKAGES) -> Pat
     source = Path(location)
     destination = CACHE / "tests"
     shutil.rmtree(destination, ignore_errors=True)
+
+    def copy(relative: str) -> None:
+        # Renamed so that the copies never shadow the `composer`/`mjcf` packages.
+        target = destination / f"dm_control_{relative}"
+        target.parent.mkdir(parents=True, exist_ok=True)
+        shutil.copy2(source / relative, target)
+
     for package in packages:
         for path in (source / package).rglob("*"):
             relative = path.relative_to(source).as_posix()
@@ -294,14 +301,9 @@ def copy_tests(python: Path, packages: tuple[str, ...] = TESTED_PACKAGES) -> Pat
                 or (path.name.startswith("test_") and path.suffix not in (".py", ".pyc"))
             )
             if is_test or is_asset:
-                # Renamed so that the copies never shadow the `composer`/`mjcf` packages.
-                target = destination / f"dm_control_{relative}"
-                target.parent.mkdir(parents=True, exist_ok=True)
-                shutil.copy2(path, target)
+                copy(relative)
     for relative in TESTED_FILES:
-        target = destination / f"dm_control_{relative}"
-        target.parent.mkdir(parents=True, exist_ok=True)
-        shutil.copy2(source / relative, target)
+        copy(relative)
     (destination / "conftest.py").write_text(_CONFTEST.format(helpers=HELPER_MODULES))
     return destination
 

@@ -18,14 +18,12 @@ class _Noise(base.Variation):
             else functools.partial(base.evaluate, variation)
         )
 
-    def _base_value(self, initial_value, current_value):
-        value = current_value if self._cumulative else initial_value
-        if value is None:
-            which = "current_value" if self._cumulative else "initial_value"
-            raise ValueError(
-                f"{type(self).__name__}(cumulative={self._cumulative}) needs a {which} to perturb"
-            )
-        return value
+    def _missing_value(self) -> ValueError:
+        """The error for a call without the value this noise perturbs."""
+        which = "current_value" if self._cumulative else "initial_value"
+        return ValueError(
+            f"{type(self).__name__}(cumulative={self._cumulative}) needs a {which} to perturb"
+        )
 
     def __repr__(self):
         return f"{type(self).__name__}({self._variation!r}, cumulative={self._cumulative})"
@@ -37,7 +35,7 @@ class Additive(_Noise):
     def __call__(self, initial_value=None, current_value=None, random_state=None):
         value = current_value if self._cumulative else initial_value
         if value is None:
-            self._base_value(initial_value, current_value)  # raises, naming what is missing
+            raise self._missing_value()
         return value + self._draw(initial_value, current_value, random_state)
 
 
@@ -47,5 +45,5 @@ class Multiplicative(_Noise):
     def __call__(self, initial_value=None, current_value=None, random_state=None):
         value = current_value if self._cumulative else initial_value
         if value is None:
-            self._base_value(initial_value, current_value)  # raises, naming what is missing
+            raise self._missing_value()
         return value * self._draw(initial_value, current_value, random_state)

@@ -5,6 +5,8 @@ from __future__ import annotations
 import dataclasses
 from typing import NamedTuple
 
+from mjcf import binding
+
 __all__ = ["ElementsUsing", "FieldTarget", "SizePatchCache", "SpringdamperScan"]
 
 
@@ -43,22 +45,31 @@ class SizePatchCache:
     model it loads and starts a new one when it loads another.
 
     Attributes:
-      geom_ids: `<geom>` element -> its compiled id, None where it has none.
       bodies: (element, `InertiaSettings`) -> its `CompiledBody`, None where its geoms
         cannot be patched.
       springdamper: the last look at the MJCF model's joints, None before the first.
       copies: the bodies' geoms and settings -> their `BodyCopies`.
-      object_ids: element whose attribute `mjcf.patching.model_patch` wrote -> its compiled id,
-        None where it has none.
+      object_ids: element (a `<geom>` whose size changed, an element whose attribute
+        `mjcf.patching.model_patch` wrote) -> its compiled id, None where it has none
+        (`object_id`).
       field_targets: (element, XML attribute) that `mjcf.patching.model_patch` wrote -> its
         `FieldTarget` in the compiled model, None where it has none.
       elements_using: (default template, XML attribute) -> the `ElementsUsing` it.
     """
 
-    geom_ids: dict = dataclasses.field(default_factory=dict)
     bodies: dict = dataclasses.field(default_factory=dict)
     springdamper: SpringdamperScan | None = None
     copies: dict = dataclasses.field(default_factory=dict)
     object_ids: dict = dataclasses.field(default_factory=dict)
     field_targets: dict = dataclasses.field(default_factory=dict)
     elements_using: dict = dataclasses.field(default_factory=dict)
+
+    def object_id(self, physics, element) -> int | None:
+        """`element`'s compiled id in `physics`, None where it has none; looked up once."""
+        if element not in self.object_ids:
+            try:
+                object_id = binding.object_id(physics.field_layout, physics.mjcf_model, element)
+            except ValueError:
+                object_id = None
+            self.object_ids[element] = object_id
+        return self.object_ids[element]

@@ -34,7 +34,7 @@ from typing import NamedTuple
 import mujoco
 import numpy as np
 
-from mjcf import binding, traversal_utils
+from mjcf import traversal_utils
 from mjcf.element import Element
 from mjcf.patching.geom_body_copies import (
     BodyCopies,
@@ -94,7 +94,7 @@ def size_writes(physics, geoms: list, cache: SizePatchCache) -> list[FieldWrite]
     new_sizes = {}
     bodies = {}
     for geom in geoms:
-        geom_id = _geom_id(physics, geom, cache)
+        geom_id = cache.object_id(physics, geom)
         if traversal_utils.default_value_source(geom, "size") is None:
             return None  # MuJoCo's built-in default: nothing in the model says which
         size = _compiled_size(geom)
@@ -114,17 +114,6 @@ def size_writes(physics, geoms: list, cache: SizePatchCache) -> list[FieldWrite]
         return None
     writes = [FieldWrite(model.geom_size, geom_id, size) for geom_id, size in new_sizes.items()]
     return writes + derived
-
-
-def _geom_id(physics, geom, cache: SizePatchCache) -> int | None:
-    """`geom`'s compiled id in `physics`, None where it has none."""
-    if geom not in cache.geom_ids:
-        try:
-            object_id = binding.object_id(physics.field_layout, physics.mjcf_model, geom)
-        except ValueError:
-            object_id = None
-        cache.geom_ids[geom] = object_id
-    return cache.geom_ids[geom]
 
 
 def _compiled_size(geom) -> np.ndarray | None:
@@ -221,7 +210,7 @@ def _look_up_body(
 ) -> CompiledBody | None:
     model = physics.model.ptr
     geoms = element.get_children("geom")
-    ids = [_geom_id(physics, geom, cache) for geom in geoms]
+    ids = [cache.object_id(physics, geom) for geom in geoms]
     first = int(model.body_geomadr[body_id])
     geom_ids = range(first, first + int(model.body_geomnum[body_id]))
     if ids != list(geom_ids):

@@ -237,13 +237,7 @@ def _field_target(physics, element, xml_name: str, cache: SizePatchCache) -> Fie
     if ref is None or ref.struct != MODEL:
         return None
     layout = physics.field_layout
-    if element not in cache.object_ids:
-        try:
-            object_id = binding.object_id(layout, physics.mjcf_model, element)
-        except ValueError:
-            object_id = None
-        cache.object_ids[element] = object_id
-    object_id = cache.object_ids[element]
+    object_id = cache.object_id(physics, element)
     if object_id is None:
         return None
     model = physics.model.ptr
