@@ -307,8 +307,11 @@ class Throughput:
         self.asynchronous.reset(seed=0)
         self.synchronous = gymnasium.vector.SyncVectorEnv([make] * num_envs)
         self.synchronous.reset(seed=0)
-        self.single_actions = _actions(self.single.action_space, steps, seed=1)
         self.vector_actions = _actions(self.threaded.action_space, steps, seed=2)
+        # The loop takes the first sub-environment's actions, so that at N = 1 it steps the
+        # same episode as the vector envs: actions change what a step costs (a lift arm
+        # touching the brick or not), and different ones put 5% between loop and threaded.
+        self.single_actions = [action[0] for action in self.vector_actions]
         self.rates = {"loop": [], "threaded": [], "async": [], "sync": []}
         self.ray = None
         if use_ray:
