@@ -49,6 +49,13 @@ def array_library(values) -> str:
     return _LIBRARIES.get(type(values).__module__.split(".", 1)[0], "")
 
 
+def row_items(rows: np.ndarray) -> np.ndarray:
+    """`rows` (n, w), each row contiguous, as a NumPy (n,) view with one item per row: a
+    row then copies as one block rather than entry by entry (about half the time for a
+    world's few floats, and a fraction for its kilobytes of MuJoCo Warp data)."""
+    return rows.view(np.dtype((np.void, rows.itemsize * rows.shape[-1])))[:, 0]
+
+
 def check_array_type(array_type: str) -> str:
     """Returns `array_type` if it is one of `ARRAY_TYPES`; raises ValueError naming it."""
     if array_type not in ARRAY_TYPES:

@@ -25,7 +25,7 @@ from typing import Any, NamedTuple
 
 import numpy as np
 
-from composer.batch import _warp, kernels
+from composer.batch import _warp, arrays, kernels
 
 __all__ = ["FieldGather", "ObservationGather"]
 
@@ -80,7 +80,6 @@ class FieldGather:
             else None
         )
         self._plain = plain
-        self._unit_weights = bool(np.all(self.weights == 1.0))
         self._numpy_plan = None if plain else _numpy_plan(self.entries, self.weights, self.ops)
         self._slice_items: _RowItems | None = None  # made at the first NumPy read
         self._device_entries = physics.arrays.asarray(self.entries.ravel())
@@ -210,16 +209,13 @@ class _RowItems:
 
     def __init__(self, rows: np.ndarray):
         self._rows = rows
-        self._item = None
-        if rows.strides[-1] == rows.itemsize:
-            self._item = np.dtype((np.void, rows.itemsize * rows.shape[-1]))
-            self._items = rows.view(self._item)[:, 0]
+        self._items = arrays.row_items(rows) if rows.strides[-1] == rows.itemsize else None
 
     def copy_to(self, out: np.ndarray) -> None:
-        if self._item is None:
+        if self._items is None:
             out[...] = self._rows
-        else:
-            np.copyto(out.view(self._item)[:, 0], self._items)
+        else:  # the items' dtype, made once (making one costs microseconds)
+            np.copyto(out.view(self._items.dtype)[:, 0], self._items)
 
 
 def _as_slice(columns: np.ndarray) -> slice | np.ndarray:

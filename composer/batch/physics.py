@@ -25,7 +25,7 @@ import numpy as np
 
 import mjcf
 from composer.batch import _warp, kernels
-from composer.batch.arrays import ArrayBridge, array_library
+from composer.batch.arrays import ArrayBridge, array_library, row_items
 from composer.batch.bindings import BatchBinding, FieldView, NamedViews, StructViews
 from mujoco_physics import field_layout
 
@@ -157,7 +157,8 @@ class BatchPhysics:
             zip(_per_world_arrays(warp, self._scratch), _per_world_arrays(warp, self.warp_data))
         )
         self._copy_back = [
-            _copy_worlds_launch(self._forward_mask, source, target) for source, target in pairs
+            _copy_worlds_launch(self._forward_mask, source, target)
+            for source, target in (pairs if self.is_cuda else [])
         ]
         self._copy_back_rows = [
             (_rows_view(source, self.num_envs), _rows_view(target, self.num_envs))
@@ -420,9 +421,8 @@ def _per_world_arrays(wp, data) -> list:
 
 def _rows_view(array, nworld: int) -> np.ndarray:
     """A contiguous Warp CPU array's memory as a NumPy (nworld,) view, one item a world's
-    row (an item copies as one block, where a row of bytes copies byte run by byte run)."""
-    rows = array.numpy().reshape(-1).view(np.uint8).reshape(nworld, -1)
-    return rows.view(np.dtype((np.void, rows.shape[1])))[:, 0]
+    row (`composer.batch.arrays.row_items`)."""
+    return row_items(array.numpy().reshape(-1).view(np.uint8).reshape(nworld, -1))
 
 
 def _copy_worlds_launch(keep, source, target):
