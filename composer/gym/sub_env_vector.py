@@ -20,21 +20,23 @@ DISABLED the caller resets it with `reset(options={'reset_mask': mask})` before 
 it again.
 """
 
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Iterable, Sequence
 from typing import Any, NamedTuple
 
 import gymnasium
 import numpy as np
 from gymnasium.vector import AutoresetMode, VectorEnv
-from gymnasium.vector.utils import batch_space, create_empty_array, iterate
+from gymnasium.vector.utils import batch_space, iterate
 
 from composer.episode_end import Autoreset
-from composer.gym.rows import batch_copier, copied, row_views, row_writer
+from composer.gym.output_buffer import OutputBuffer
+from composer.gym.rows import copied, row_views, row_writer
 
 __all__ = [
     "SubEnvVectorEnv",
     "SubEnvOutcome",
     "SubEnvironmentError",
+    "advance_sub_env",
     "call_sub_env",
     "check_spaces_match",
     "reset_sub_env",
@@ -104,17 +106,35 @@ def step_sub_env(
       episode_over: whether the previous step ended `env`'s episode.
     """
     mode = Autoreset.of(autoreset_mode)
-    if mode.resets_before_step(episode_over):
-        return reset_sub_env(env, None, None)
-    observation, reward, terminated, truncated, info = env.step(action)
-    if mode.resets_after_step(terminated or truncated):
-        # The reset overwrites the row that an attached sub-environment returned.
-        observation = copied(observation)
-        reset_observation, reset_info = env.reset()
-        return SubEnvOutcome(
-            reset_observation, reward, terminated, truncated, reset_info, observation, info
+    return SubEnvOutcome(
+        *advance_sub_env(
+            env, action, bool(mode.resets_before_step(episode_over)), mode is Autoreset.SAME_STEP
         )
-    return SubEnvOutcome(observation, reward, terminated, truncated, info)
+    )
+
+
+def advance_sub_env(env: gymnasium.Env, action, reset_first: bool, reset_at_end: bool) -> tuple:
+    """`step_sub_env`'s work with the autoreset decided: the fields of a `SubEnvOutcome`.
+
+    Args:
+      reset_first: reset `env` instead of stepping it (its episode ended at the previous
+        step and the mode resets at the next one).
+      reset_at_end: reset `env` right after a step that ends its episode (SAME_STEP).
+
+    Returns:
+      (observation, reward, terminated, truncated, info, final_observation, final_info),
+      as a plain tuple: a vector env that stores the fields at once makes no record.
+    """
+    if reset_first:
+        observation, info = env.reset()
+        return observation, 0.0, False, False, info, None, None
+    observation, reward, terminated, truncated, info = env.step(action)
+    if reset_at_end and (terminated or truncated):
+        # The reset overwrites the row that an attached sub-environment returned.
+        final_observation = copied(observation)
+        reset_observation, reset_info = env.reset()
+        return reset_observation, reward, terminated, truncated, reset_info, final_observation, info
+    return observation, reward, terminated, truncated, info, None, None
 
 
 def call_sub_env(env: gymnasium.Env, name: str, args: tuple, kwargs: dict) -> Any:
@@ -153,7 +173,9 @@ class SubEnvVectorEnv(VectorEnv):
       metadata: the sub-environments' metadata; 'autoreset_mode' is added.
       render_mode: the sub-environments' render mode.
       copy: return copies of the observation arrays rather than the arrays themselves
-        (which the next `step` or `reset` overwrites).
+        (which the next `step` or `reset` overwrites). A step's copies are never written
+        again while anything refers to them (or to a view of them); the memory of those
+        nobody holds any more is reused (see `output_buffer`).
     """
 
     def __init__(
@@ -177,14 +199,16 @@ class SubEnvVectorEnv(VectorEnv):
         self.single_action_space = single_action_space
         self.observation_space = batch_space(single_observation_space, num_envs)
         self.action_space = batch_space(single_action_space, num_envs)
-        self._observations = create_empty_array(single_observation_space, num_envs, fn=np.zeros)
+        # The batched outputs live in one buffer, copied out with one copy per step.
+        self._outputs = OutputBuffer(single_observation_space, num_envs)
+        live = self._outputs.live
+        self._observations = live.observations
+        self._rewards = live.rewards
+        self._terminations = live.terminations
+        self._truncations = live.truncations
         # Row i's views are what sub-environment i writes into (see `rows.attach_row`).
         self._rows = [row_views(self._observations, i) for i in range(num_envs)]
         self._row_writers = [row_writer(row) for row in self._rows]
-        self._copy_observations = batch_copier(self._observations)
-        self._rewards = np.zeros(num_envs, dtype=np.float64)
-        self._terminations = np.zeros(num_envs, dtype=np.bool_)
-        self._truncations = np.zeros(num_envs, dtype=np.bool_)
         # Read and written per sub-environment on every step: a list of bools is cheaper
         # there than an array. The autoreset rule is applied to one ended episode here,
         # once, rather than on every step.
@@ -243,7 +267,7 @@ class SubEnvVectorEnv(VectorEnv):
         sub_options = options or None
         indices = np.flatnonzero(mask).tolist()
         outcomes = self._reset_sub_envs({i: (seeds[i], sub_options) for i in indices})
-        return self._observations_out(), self._batched_infos(outcomes)
+        return self._observations_out(), self._batched_infos(outcomes.items())
 
     def step(self, actions) -> tuple[Any, np.ndarray, np.ndarray, np.ndarray, dict[str, Any]]:
         """Steps every sub-environment with its row of `actions`, autoresetting as set.
@@ -258,7 +282,6 @@ class SubEnvVectorEnv(VectorEnv):
           SubEnvironmentError: if a sub-environment raised.
         """
         self._check_open()
-        mode = self._autoreset
         episode_over = self._episode_over
         if self._refuses_after_end and True in episode_over:
             raise RuntimeError(
@@ -275,18 +298,27 @@ class SubEnvVectorEnv(VectorEnv):
             raise ValueError(
                 f"actions: expected one per sub-environment ({self.num_envs}), got {len(rows)}"
             )
+        infos = self._step_rows(rows)
+        if self.copy:
+            return (*self._outputs.copy(), infos)
+        return (
+            self._observations,
+            self._rewards.copy(),
+            self._terminations.copy(),
+            self._truncations.copy(),
+            infos,
+        )
+
+    def _step_rows(self, rows: Sequence[Any]) -> dict[str, Any]:
+        """Steps sub-environment i with `rows[i]` for every i, stores the outcomes and
+        returns the batched infos (a backend may take a shorter way to the same)."""
+        mode, episode_over = self._autoreset, self._episode_over
         # The arguments hold each episode's state from before the step, which `_store`
         # then updates.
         outcomes = self._step_sub_envs(
             {i: (action, mode, episode_over[i]) for i, action in enumerate(rows)}
         )
-        return (
-            self._observations_out(),
-            self._rewards.copy(),
-            self._terminations.copy(),
-            self._truncations.copy(),
-            self._batched_infos(outcomes),
-        )
+        return self._batched_infos(outcomes.items())
 
     def render(self) -> tuple[Any, ...]:
         """Returns each sub-environment's `render()`, in order."""
@@ -408,10 +440,14 @@ class SubEnvVectorEnv(VectorEnv):
         self._episode_over[index] = self._over_after_end and bool(terminated or truncated)
 
     def _observations_out(self):
-        return self._copy_observations() if self.copy else self._observations
+        return self._outputs.copy_observations() if self.copy else self._observations
 
-    def _batched_infos(self, outcomes: dict[int, SubEnvOutcome]) -> dict[str, Any]:
+    def _batched_infos(self, outcomes: Iterable[tuple[int, tuple]]) -> dict[str, Any]:
         """Gymnasium's batching of the outcomes' infos (`VectorEnv._add_info`).
+
+        Args:
+          outcomes: (index, outcome) pairs in index order, each outcome a `SubEnvOutcome`
+            or the plain tuple of its fields (`advance_sub_env`'s).
 
         Common infos take shorter ways to `_add_info`'s results, without its calls: a
         number (int, float, bool or NumPy number) whose key is new gets the column and mask
@@ -420,14 +456,13 @@ class SubEnvVectorEnv(VectorEnv):
         filled in. The adapter's 'discount' takes these ways on every step.
         """
         infos: dict[str, Any] = {}
-        for i, outcome in outcomes.items():
-            if outcome.final_info is not None:
+        for i, outcome in outcomes:
+            info, final_observation, final_info = outcome[4:]
+            if final_info is not None:
                 infos = self._add_info(
-                    infos,
-                    {"final_obs": outcome.final_observation, "final_info": outcome.final_info},
-                    i,
+                    infos, {"final_obs": final_observation, "final_info": final_info}, i
                 )
-            for key, value in outcome.info.items():
+            for key, value in info.items():
                 column = infos.get(key)
                 mask_key = "_" + key
                 if column is None:

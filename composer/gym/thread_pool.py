@@ -149,6 +149,10 @@ class PinnedThreadPool:
             for s in range(1, self.num_threads)
         ]
         self._wanted = [False] * self.num_threads
+        # Slice-assigned to select or clear every slot (or share) at once.
+        self._every_slot, self._no_slot = [True] * size, [False] * size
+        self._no_result = [None] * size
+        self._every_share, self._no_share = [True] * self.num_threads, [False] * self.num_threads
         self._hand_offs = 0
         self._busy = False  # a call is under way, or one was left unfinished
         self._closed = False
@@ -213,21 +217,62 @@ class PinnedThreadPool:
                 self._check_index(i)
             selected[i] = True
             wanted[i % k] = True
+        self._execute(task)
+        results = call.results
+        out = {i: results[i] for i in indices}
+        self._finish(indices)
+        return out
+
+    def run_all(self, task: Callable[[int], Any]) -> list[Any]:
+        """`run(task, range(size))`, its results as a list in slot order.
+
+        The way a vector step calls: every slot is selected without a loop over the
+        indices, and the results are copied out as one list.
+
+        Raises:
+          What `run` raises.
+        """
+        if self._closed or threading.get_ident() != self._owner_ident:
+            self._check_caller()
+        if not self._workers:
+            return list(self._run_alone(task, range(self.size)).values())
+        if self._busy:
+            self._finish_interrupted()
+        call = self._call
+        self._busy = True
+        call.selected[:] = self._every_slot
+        self._wanted[:] = self._every_share
+        self._execute(task)
+        out = call.results.copy()
+        self._finish(None)
+        return out
+
+    def _execute(self, task: Callable[[int], Any]) -> None:
+        """Runs `task` on the selected slots: the workers', then the owner's share, and
+        waits for the workers."""
+        call = self._call
         call.task = task
         self._start_workers()
         self._run_own_share(task)
         self._wait_for_workers()
         self._busy = False
         call.task = None
-        results = call.results
-        out = {i: results[i] for i in indices}
+
+    def _finish(self, indices: Collection[int] | None) -> None:
+        """Clears the call's slots (`indices`, or None for all) and raises the error of
+        the lowest failed one, if any."""
+        call = self._call
         if call.failed:
-            lowest = min(i for i in indices if call.errors[i] is not None)
-            error = call.errors[lowest]
+            errors = call.errors
+            lowest = min(
+                i
+                for i in (range(self.size) if indices is None else indices)
+                if errors[i] is not None
+            )
+            error = errors[lowest]
             self._clear(indices)
             raise SubEnvironmentError(lowest, error) from error
         self._clear(indices)
-        return out
 
     def _run_alone(self, task: Callable[[int], Any], indices: Collection[int]) -> dict[int, Any]:
         """`run` for a pool of one thread: the owner runs every task, nothing is shared."""
@@ -334,18 +379,23 @@ class PinnedThreadPool:
         self._wait_for_workers()
         self._busy = False
         self._call.task = None
-        self._clear(range(self.size))
+        self._clear(None)
 
-    def _clear(self, indices: Collection[int]) -> None:
-        call, wanted = self._call, self._wanted
-        selected, results, errors = call.selected, call.results, call.errors
-        for i in indices:
-            selected[i] = False
-            results[i] = None
-            errors[i] = None
+    def _clear(self, indices: Collection[int] | None) -> None:
+        """Unselects `indices` (None: every slot) and drops their results and errors."""
+        call = self._call
+        if indices is None:
+            call.selected[:] = self._no_slot
+            call.results[:] = self._no_result
+            call.errors[:] = self._no_result
+        else:
+            selected, results, errors = call.selected, call.results, call.errors
+            for i in indices:
+                selected[i] = False
+                results[i] = None
+                errors[i] = None
         call.failed = False
-        for s in range(self.num_threads):
-            wanted[s] = False
+        self._wanted[:] = self._no_share
 
     def close(self, *, timeout: float = _CLOSE_TIMEOUT_S) -> None:
         """Stops the workers and joins them, waiting at most `timeout` seconds in all.

@@ -13,8 +13,9 @@ from typing import Any
 import gymnasium
 from gymnasium.vector import AutoresetMode
 
+from composer.episode_end import Autoreset
 from composer.gym.rows import attach_row
-from composer.gym.sub_env_vector import SubEnvVectorEnv, check_spaces_match
+from composer.gym.sub_env_vector import SubEnvVectorEnv, advance_sub_env, check_spaces_match
 from composer.gym.thread_pool import PinnedThreadPool
 
 __all__ = ["ThreadedVectorEnv"]
@@ -81,6 +82,10 @@ class ThreadedVectorEnv(SubEnvVectorEnv):
             copy=copy,
         )
         self._map(attach_row, {i: (row,) for i, row in enumerate(self._rows)})
+        # What a step needs of the autoreset mode, decided once (see `_step_one`).
+        self._resets_first = bool(self._autoreset.resets_before_step(True))
+        self._resets_at_end = self._autoreset is Autoreset.SAME_STEP
+        self._step_actions: Sequence[Any] = ()
 
     @property
     def envs(self) -> tuple[gymnasium.Env, ...]:
@@ -108,6 +113,27 @@ class ThreadedVectorEnv(SubEnvVectorEnv):
             return result
 
         return self._pool.run(run_and_store, arguments)
+
+    def _step_rows(self, rows: Sequence[Any]) -> dict[str, Any]:
+        """Steps every sub-environment on its thread, each storing its own outcome."""
+        self._step_actions = rows
+        try:
+            results = self._pool.run_all(self._step_one)
+        finally:
+            self._step_actions = ()
+        return self._batched_infos(enumerate(results))
+
+    def _step_one(self, index: int) -> tuple:
+        """Steps (or autoresets) sub-environment `index` and stores its outcome, on its
+        thread; no arguments are built per step (the pool calls this bound method)."""
+        fields = advance_sub_env(
+            self._envs[index],
+            self._step_actions[index],
+            self._episode_over[index] and self._resets_first,
+            self._resets_at_end,
+        )
+        self._store(index, fields)
+        return fields
 
     def close_extras(self, **kwargs: Any) -> None:
         """Closes the sub-environments, then stops and joins the worker threads."""

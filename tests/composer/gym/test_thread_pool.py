@@ -258,3 +258,34 @@ def test_a_pool_nobody_refers_to_stops_its_workers():
 def test_bad_sizes_are_rejected_naming_the_argument(size, num_threads, message):
     with pytest.raises(ValueError, match=message.replace("(", r"\(")):
         PinnedThreadPool(size, num_threads)
+
+
+@pytest.mark.parametrize(("size", "num_threads"), [(5, 2), (3, 1)])
+def test_run_all_returns_every_slots_result_in_order_each_on_its_thread(size, num_threads):
+    pool = PinnedThreadPool(size, num_threads)
+    threads = _thread_ids(pool, range(size))
+    assert pool.run_all(lambda i: (i * 10, threading.get_ident())) == [
+        (i * 10, threads[i]) for i in range(size)
+    ]
+    pool.close()
+
+
+def test_run_all_raises_for_the_lowest_failed_slot_and_leaves_nothing_selected():
+    pool = PinnedThreadPool(4, 2)
+    ran = []
+
+    def task(i):
+        ran.append(i)
+        if i in (3, 2):
+            raise ValueError(f"slot {i} is broken")
+        return i
+
+    with pytest.raises(SubEnvironmentError, match="sub-environment 2 raised ValueError"):
+        pool.run_all(task)
+    assert sorted(ran) == [0, 1, 2, 3]
+    # Only the slots asked for run next, with no result or error left from run_all.
+    ran.clear()
+    assert pool.run(lambda i: ran.append(i) or i, [1]) == {1: 1}
+    assert ran == [1]
+    assert pool.run_all(lambda i: -i) == [0, -1, -2, -3]
+    pool.close()
