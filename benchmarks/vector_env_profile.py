@@ -14,6 +14,11 @@ a `ThreadedVectorEnv` of N sub-environments on k = min(N, cores) threads is step
     each thread waits at the end-of-step barrier), mean over threads; and per thread
     (caller first, then workers 1..k-1) in a second table, with the share each steps;
   straggler us: the last share's end less the median share's end;
+  waiting us: per sub-environment step, its wall time less its thread's CPU time over
+    it (waiting for the GIL, or for a core), mean over sub-environment steps;
+  resets: sub-environment steps that were autoresets (a new episode started instead of
+    a step), per 100 vector steps, and their mean wall time in ms: a thread resetting
+    holds its share's end back while the others wait at the barrier;
   renders in flight: for a task whose observations render (a vision task), the
     `mujoco.Renderer.render` calls of a vector step in flight at once, on average (their
     summed time over the time any was in flight): k when every thread renders at once,
@@ -112,13 +117,21 @@ class _Timings:
     def __init__(self, envs: ThreadedVectorEnv):
         self.starts = np.zeros(envs.num_envs)
         self.ends = np.zeros(envs.num_envs)
+        self.waiting: list[float] = []  # wall less CPU time of each sub-environment step
+        self.resets: list[float] = []  # wall time of each autoreset
+        self._envs = envs
         self._step_one = envs._step_one
         envs._step_one = self.timed_step  # what the env's step hands the pool
 
     def timed_step(self, index: int) -> tuple:
+        resets = self._envs._episode_over[index]
+        cpu = time.thread_time()
         self.starts[index] = time.perf_counter()
         fields = self._step_one(index)
-        self.ends[index] = time.perf_counter()
+        self.ends[index] = end = time.perf_counter()
+        self.waiting.append(end - self.starts[index] - (time.thread_time() - cpu))
+        if resets:
+            self.resets.append(end - self.starts[index])
         return fields
 
 
@@ -164,6 +177,9 @@ def profile_steps(task: str, num_envs: int, steps: int) -> dict[str, object]:
         "wake_min": min(wake) * us if wake else 0.0,
         "wait": statistics.mean(wait) * us,
         "straggler": statistics.median(straggle) * us,
+        "waiting": statistics.mean(timings.waiting) * us,
+        "resets": len(timings.resets) * 100 / steps,
+        "reset_ms": statistics.mean(timings.resets) * 1e3 if timings.resets else 0.0,
         "step": statistics.median(total) * us,
     }
 
@@ -311,10 +327,10 @@ def main() -> None:
     loop_us = loop_step_us(args.task, args.steps)
     print(
         "\n| N | threads | hand-offs per step | wake-up us (min) | barrier wait us "
-        "| straggler us | renders in flight | vector step us | threaded/loop "
-        "| raw lock-step ceiling |"
+        "| straggler us | waiting us | resets (ms) | renders in flight | vector step us "
+        "| threaded/loop | raw lock-step ceiling |"
     )
-    print("|---|---|---|---|---|---|---|---|---|---|")
+    print("|---|---|---|---|---|---|---|---|---|---|---|---|")
     hand_offs = []
     rows = {}
     for size in sizes:
@@ -327,6 +343,7 @@ def main() -> None:
         print(
             f"| {size} | {row['threads']} | {row['hand_offs']:g} | {row['wake']:.0f} "
             f"({row['wake_min']:.0f}) | {row['wait']:.0f} | {row['straggler']:.0f} | "
+            f"{row['waiting']:.0f} | {row['resets']:.1f} ({row['reset_ms']:.1f}) | "
             + ("-" if flight is None else f"{flight:.2f} of {row['threads']}")
             + f" | {row['step']:.0f} | {speedup:.2f}x | {ceiling:.2f}x |"
         )
