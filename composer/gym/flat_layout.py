@@ -18,7 +18,7 @@ from gymnasium.vector.utils import create_empty_array
 
 from composer.gym.rows import row_views, row_writer
 
-__all__ = ["FlatBatch", "FlatLayout", "leaves"]
+__all__ = ["FlatBatch", "FlatLayout", "leaves", "rebuilt"]
 
 _ALIGNMENT = 8
 
@@ -84,15 +84,16 @@ class FlatLayout:
             .reshape(buffer.shape[:1] + leaf.shape)
             for leaf in self._leaves
         )
-        return _rebuilt(self._template, arrays)
+        return rebuilt(self._template, arrays)
 
 
-def _rebuilt(template, arrays):
-    """`template`'s structure with its leaves taken in order from the iterator `arrays`."""
+def rebuilt(template, arrays):
+    """`template`'s structure (an array, or dict/tuple of them) with its leaves taken in
+    order from the iterator `arrays`: the inverse of `leaves`."""
     if isinstance(template, dict):
-        return type(template)((key, _rebuilt(part, arrays)) for key, part in template.items())
+        return type(template)((key, rebuilt(part, arrays)) for key, part in template.items())
     if isinstance(template, tuple):
-        return tuple(_rebuilt(part, arrays) for part in template)
+        return tuple(rebuilt(part, arrays) for part in template)
     return next(arrays)
 
 

@@ -30,7 +30,7 @@ import gymnasium
 import numpy as np
 from gymnasium.vector.utils import create_empty_array
 
-from composer.gym.flat_layout import leaves
+from composer.gym.flat_layout import leaves, rebuilt
 from composer.gym.rows import batch_copier
 
 __all__ = ["OutputBuffer", "StepOutputs"]
@@ -93,7 +93,7 @@ class OutputBuffer:
         live = np.ndarray((), self._dtype, self._bytes)
         names = self._dtype.names
         if in_buffer:
-            observations = _rebuilt(template, iter(live[name] for name in names[3:]))
+            observations = rebuilt(template, iter(live[name] for name in names[3:]))
             self._read_observations = _reader(template, iter(names[3:]))
             self._copy_observations: Callable[[], Any] | None = None
         else:
@@ -164,15 +164,6 @@ def _containers_and_leaves(batch) -> list:
     if isinstance(batch, tuple):
         return [batch, *(item for part in batch for item in _containers_and_leaves(part))]
     return [batch]
-
-
-def _rebuilt(template, arrays):
-    """`template`'s structure with its leaves taken in order from the iterator `arrays`."""
-    if isinstance(template, dict):
-        return type(template)((key, _rebuilt(part, arrays)) for key, part in template.items())
-    if isinstance(template, tuple):
-        return tuple(_rebuilt(part, arrays) for part in template)
-    return next(arrays)
 
 
 def _reader(template, names) -> Callable[[np.ndarray], Any]:

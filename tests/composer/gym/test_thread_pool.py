@@ -96,7 +96,8 @@ def test_results_come_back_by_slot_and_only_for_the_slots_asked(num_threads):
 
 
 @pytest.mark.parametrize("num_threads", [1, 2])
-def test_an_exception_names_the_lowest_failing_slot_after_every_slot_ran(num_threads):
+@pytest.mark.parametrize("every_slot", [False, True], ids=["run", "run_all"])
+def test_an_exception_names_the_lowest_failing_slot_after_every_slot_ran(num_threads, every_slot):
     pool = PinnedThreadPool(4, num_threads)
     ran = []
 
@@ -107,12 +108,16 @@ def test_an_exception_names_the_lowest_failing_slot_after_every_slot_ran(num_thr
         return i
 
     with pytest.raises(SubEnvironmentError, match="sub-environment 1 raised ValueError") as info:
-        pool.run(task, range(4))
+        pool.run_all(task) if every_slot else pool.run(task, range(4))
     assert info.value.index == 1
     assert str(info.value.__cause__) == "slot 1 is broken"
     assert sorted(ran) == [0, 1, 2, 3]
-    # The pool goes on, with nothing left over from the failed call.
-    assert pool.run(lambda i: i, [2, 3]) == {2: 2, 3: 3}
+    # The pool goes on, with nothing left over from the failed call: only the slots
+    # asked for run, and no result or error is left behind.
+    ran.clear()
+    assert pool.run(lambda i: ran.append(i) or i, [2, 3]) == {2: 2, 3: 3}
+    assert sorted(ran) == [2, 3]
+    assert pool.run_all(lambda i: -i) == [0, -1, -2, -3]
     pool.close()
 
 
@@ -267,25 +272,4 @@ def test_run_all_returns_every_slots_result_in_order_each_on_its_thread(size, nu
     assert pool.run_all(lambda i: (i * 10, threading.get_ident())) == [
         (i * 10, threads[i]) for i in range(size)
     ]
-    pool.close()
-
-
-def test_run_all_raises_for_the_lowest_failed_slot_and_leaves_nothing_selected():
-    pool = PinnedThreadPool(4, 2)
-    ran = []
-
-    def task(i):
-        ran.append(i)
-        if i in (3, 2):
-            raise ValueError(f"slot {i} is broken")
-        return i
-
-    with pytest.raises(SubEnvironmentError, match="sub-environment 2 raised ValueError"):
-        pool.run_all(task)
-    assert sorted(ran) == [0, 1, 2, 3]
-    # Only the slots asked for run next, with no result or error left from run_all.
-    ran.clear()
-    assert pool.run(lambda i: ran.append(i) or i, [1]) == {1: 1}
-    assert ran == [1]
-    assert pool.run_all(lambda i: -i) == [0, -1, -2, -3]
     pool.close()
