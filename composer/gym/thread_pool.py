@@ -152,6 +152,7 @@ class PinnedThreadPool:
         # Slice-assigned to select or clear every slot (or share) at once.
         self._every_slot, self._no_slot = [True] * size, [False] * size
         self._no_result = [None] * size
+        self._every_index = range(size)
         self._every_share, self._no_share = [True] * self.num_threads, [False] * self.num_threads
         self._hand_offs = 0
         self._busy = False  # a call is under way, or one was left unfinished
@@ -204,7 +205,7 @@ class PinnedThreadPool:
         if self._closed or threading.get_ident() != self._owner_ident:
             self._check_caller()
         if not self._workers:
-            return self._run_alone(task, indices)
+            return dict(zip(indices, self._run_alone(task, indices)))
         if self._busy:
             self._finish_interrupted()
         call, wanted, k = self._call, self._wanted, self.num_threads
@@ -235,7 +236,7 @@ class PinnedThreadPool:
         if self._closed or threading.get_ident() != self._owner_ident:
             self._check_caller()
         if not self._workers:
-            return list(self._run_alone(task, range(self.size)).values())
+            return self._run_alone(task, self._every_index)
         if self._busy:
             self._finish_interrupted()
         call = self._call
@@ -274,21 +275,27 @@ class PinnedThreadPool:
             raise SubEnvironmentError(lowest, error) from error
         self._clear(indices)
 
-    def _run_alone(self, task: Callable[[int], Any], indices: Collection[int]) -> dict[int, Any]:
-        """`run` for a pool of one thread: the owner runs every task, nothing is shared."""
+    def _run_alone(self, task: Callable[[int], Any], indices: Collection[int]) -> list[Any]:
+        """`run` for a pool of one thread: the owner runs every task, nothing is shared.
+
+        Returns:
+          The results in the order of `indices`.
+        """
         size = self.size
         for i in indices:
             if not 0 <= i < size:
                 self._check_index(i)
-        results, errors = {}, {}
+        results = []
+        lowest, lowest_error = size, None
         for i in indices:
             try:
-                results[i] = task(i)
+                results.append(task(i))
             except Exception as error:  # KeyboardInterrupt and the like propagate
-                errors[i] = error
-        if errors:
-            lowest = min(errors)
-            raise SubEnvironmentError(lowest, errors[lowest]) from errors[lowest]
+                results.append(None)
+                if i < lowest:
+                    lowest, lowest_error = i, error
+        if lowest_error is not None:
+            raise SubEnvironmentError(lowest, lowest_error) from lowest_error
         return results
 
     def _check_index(self, index: int) -> None:
