@@ -15,7 +15,8 @@ a `ThreadedVectorEnv` of N sub-environments on k = min(N, cores) threads is step
     (caller first, then workers 1..k-1) in a second table, with the share each steps;
   straggler us: the last share's end less the median share's end;
   waiting us: per sub-environment step, its wall time less its thread's CPU time over
-    it (waiting for the GIL, or for a core), mean over sub-environment steps;
+    it (waiting for the GIL, or for a core; for a vision task, also the time a software
+    GL driver renders on threads of its own), mean over sub-environment steps;
   resets: sub-environment steps that were autoresets (a new episode started instead of
     a step), per 100 vector steps, and their mean wall time in ms: a thread resetting
     holds its share's end back while the others wait at the barrier;
@@ -184,7 +185,9 @@ def profile_steps(task: str, num_envs: int, steps: int) -> dict[str, object]:
     }
 
 
-def loop_step_us(task: str, steps: int) -> float:
+def loop_step_us(task: str, steps: int, repeats: int = 3) -> float:
+    """us per step of one environment in a loop: the median of `repeats` passes of
+    `steps` steps (one pass read 663 and 787 us in two runs on a 2-core machine)."""
     env = _make_env(task)
     env.reset(seed=0)
     # The actions `profile_steps` gives sub-environment 0 of a vector env of one (the same
@@ -192,14 +195,16 @@ def loop_step_us(task: str, steps: int) -> float:
     rng = np.random.default_rng(0)
     shape = env.action_space.shape
     actions = [rng.uniform(-1, 1, (1, *shape)).astype(np.float32)[0] for _ in range(steps)]
-    start = time.perf_counter()
-    for action in actions:
-        _, _, terminated, truncated, _ = env.step(action)
-        if terminated or truncated:
-            env.reset()
-    elapsed = time.perf_counter() - start
+    passes = []
+    for _ in range(repeats):
+        start = time.perf_counter()
+        for action in actions:
+            _, _, terminated, truncated, _ = env.step(action)
+            if terminated or truncated:
+                env.reset()
+        passes.append(time.perf_counter() - start)
     env.close()
-    return elapsed / steps * 1e6
+    return statistics.median(passes) / steps * 1e6
 
 
 def raw_ceiling(task: str, num_envs: int, steps: int) -> float:
