@@ -22,6 +22,7 @@ observations out of the buffer: they are batched by
 `gymnasium.vector.utils.create_empty_array` and copied leaf by leaf.
 """
 
+import collections
 import sys
 from collections.abc import Callable
 from typing import Any, NamedTuple
@@ -102,8 +103,8 @@ class OutputBuffer:
         self.live = StepOutputs(observations, live[names[0]], live[names[1]], live[names[2]])
         gil = getattr(sys, "_is_gil_enabled", lambda: True)()
         self._recycles = bool(in_buffer and gil and _getrefcount is not None)
-        self._copies: list[_Copy] = []
-        self._next_replaced = 0
+        # The last copies made, oldest first: a new one pushes out the oldest.
+        self._copies: collections.deque[_Copy] = collections.deque(maxlen=_RECYCLED)
 
     def copy(self) -> StepOutputs:
         """Copies of every live array: a recycled copy nobody holds, or new arrays."""
@@ -115,18 +116,12 @@ class OutputBuffer:
         new = self._new_copy()
         if self._recycles:
             new.counts = new.reference_counts()
-            if len(self._copies) < _RECYCLED:
-                self._copies.append(new)
-            else:
-                self._copies[self._next_replaced] = new
-                self._next_replaced = (self._next_replaced + 1) % _RECYCLED
+            self._copies.append(new)
         return new.outputs
 
     def copy_observations(self) -> Any:
-        """A new copy of the live observations."""
-        if self._copy_observations is not None:
-            return self._copy_observations()
-        return self._read_observations(np.ndarray((), self._dtype, self._bytes.copy()))
+        """A new copy of the live observations (never a recycled one)."""
+        return self._new_copy().outputs.observations
 
     def _new_copy(self) -> _Copy:
         buffer = self._bytes.copy()

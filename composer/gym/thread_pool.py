@@ -267,7 +267,7 @@ class PinnedThreadPool:
             errors = call.errors
             lowest = min(
                 i
-                for i in (range(self.size) if indices is None else indices)
+                for i in (self._every_index if indices is None else indices)
                 if errors[i] is not None
             )
             error = errors[lowest]
