@@ -1,10 +1,9 @@
 #!/usr/bin/env bash
-# The GPU check, in one call on a machine with an NVIDIA GPU, in about 8 minutes: the warp
-# tests on cuda:0, the batch benchmark at 1,024 to 8,192 worlds beside raw MuJoCo Warp and
-# the CPU ceiling (raw mj_step on all cores), then the vector envs' tables on all cores
-# (features N up to 64, vision up to 16) and the threaded env's profile (features, and
-# vision's renders in flight). Prints the tables; each part has its own time limit (in
-# all 490 s at most).
+# The GPU check, in one call on a machine with an NVIDIA GPU, in about 6 minutes: the warp
+# tests on cuda:0 and the batch benchmark at 1,024 to 8,192 worlds beside raw MuJoCo Warp and
+# the CPU ceiling (raw mj_step on all cores). Prints the tables; each part has its own time
+# limit (in all 320 s at most). The vector envs' tables on all of the machine's cores are
+# benchmarks/cores_check.sh, a call of their own.
 #
 # Usage: bash benchmarks/gpu_check.sh
 # Set-up: uses .venv when it exists (carry it to the machine), else makes one and installs
@@ -38,19 +37,5 @@ timeout 120 python -m pytest -q -p no:cacheprovider -m warp tests/composer/batch
 echo "== batch benchmark on cuda:0"
 timeout 200 python benchmarks/batch_env.py --device cuda:0 --num-envs 1024,4096,8192 \
   --steps 50 --baselines --producer-states 256
-
-# The anchors in one run: loop, Gymnasium's Async and Sync vector envs, the threaded env
-# and the lock-step ceiling; features first, then vision (its frames render on the GPU).
-echo "== vector envs on $(nproc) cores: features"
-timeout 60 python benchmarks/vector_env.py --tasks reach_site_features \
-  --sizes 1,4,8,16,32,64 --repeats 3 --steps 20 --no-ray
-echo "== vector envs on $(nproc) cores: vision"
-timeout 40 python benchmarks/vector_env.py --tasks reach_site_vision --no-overhead \
-  --sizes 1,4,8,16 --repeats 2 --steps 10 --no-ray
-echo "== where the threaded env's time goes"
-timeout 30 python benchmarks/vector_env_profile.py --sizes 4,16,32 --steps 20
-echo "== the threaded vision env: renders in flight at once on $(nproc) threads"
-timeout 40 python benchmarks/vector_env_profile.py --task reach_site_vision --sizes 16 --steps 10 \
-  --no-switch-intervals
 
 echo "kernel cache: $(cuda_binaries) CUDA binaries after the run (more: some compiled here)"

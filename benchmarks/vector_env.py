@@ -13,7 +13,9 @@ Rows:
   threaded N: `ThreadedVectorEnv` of N sub-environments (one thread per core, the
     calling one included) in environment steps per second / one `GymnasiumEnv` stepped
     in a loop, both with autoreset (targets: >= 0.97x at N = 1); the same for
-    `gymnasium.vector.AsyncVectorEnv` (one process per sub-environment) and
+    `gymnasium.vector.AsyncVectorEnv` (one process per sub-environment, spawned rather
+    than forked for a task with image observations: a forked worker cannot make an EGL
+    context once the benchmark has rendered) and
     `gymnasium.vector.SyncVectorEnv` (the sub-environments in turn, in the calling
     thread) over the same sub-environments, and threaded / async.
   free ceiling: one thread per core, each calling raw `mj_step(model, data, 20)` on its
@@ -73,6 +75,12 @@ _RAY_TARGET = 1.5  # Ray's cost per vector step over an empty actor round trip
 
 def _make_env(task: str = _TASK) -> GymnasiumEnv:
     return GymnasiumEnv(manipulation.load(task))
+
+
+def _renders_images(env: GymnasiumEnv) -> bool:
+    """Whether any of the env's observations is an image: uint8, (..., height, width, channels)."""
+    spaces = env.observation_space.values()
+    return any(space.dtype == "uint8" and len(space.shape) >= 3 for space in spaces)
 
 
 def _actions(space: gymnasium.Space, count: int, seed: int) -> list:
@@ -303,7 +311,11 @@ class Throughput:
         self.single.reset(seed=0)
         self.threaded = ThreadedVectorEnv([make] * num_envs)
         self.threaded.reset(seed=0)
-        self.asynchronous = gymnasium.vector.AsyncVectorEnv([make] * num_envs)
+        # Forked workers cannot make an EGL context once this process has rendered
+        # ("Offscreen framebuffer is not complete"), so a task that renders gets
+        # freshly spawned ones; the rest get Gymnasium's default start method.
+        context = "spawn" if _renders_images(self.single) else None
+        self.asynchronous = gymnasium.vector.AsyncVectorEnv([make] * num_envs, context=context)
         self.asynchronous.reset(seed=0)
         self.synchronous = gymnasium.vector.SyncVectorEnv([make] * num_envs)
         self.synchronous.reset(seed=0)
