@@ -32,8 +32,10 @@ Then, from one sub-environment stepped alone: its CPU time, the part that is MuJ
 (`mj_step*`, `mjr_render` and `mjr_readPixels` calls timed on this thread) and the rest
 (Python, the GIL held); the GIL
 releases per sub-environment step (calls into `mujoco` and ctypes, each releasing the GIL
-and taking it back, counted with `sys.setprofile`); and the threaded env's speed at
-GIL switch intervals of 5 ms (CPython's default), 0.5 ms and 0.05 ms, over the loop's.
+and taking it back, counted with `sys.setprofile`); and the threaded env's speed over the
+loop's at the largest N, at GIL switch intervals of 5 ms (CPython's default), 0.5 ms and
+0.05 ms, and with 2, 4, 8, ... threads up to one per core (fewer threads than cores,
+each with a larger shard: fewer threads contending for the GIL).
 
 Last, a model of c cores (default 16): a vector step takes
   max(ceil(N / c) * (M + P), N * P) + (min(N, c) - 1) * h
@@ -41,7 +43,7 @@ Last, a model of c cores (default 16): a vector step takes
 one thread at a time, h: one hand-off), against N * (M + P) for a loop.
 
 Usage: python benchmarks/vector_env_profile.py [--task T] [--sizes 4,16,32] [--steps N]
-    [--model-cores 16] [--no-switch-intervals]
+    [--model-cores 16] [--no-switch-intervals] [--no-thread-counts]
 """
 
 import argparse
@@ -280,25 +282,44 @@ def split_step(task: str, steps: int) -> tuple[float, float, float]:
     return total / steps * 1e6, mujoco_time[0] / steps * 1e6, gil_releases
 
 
+def _threaded_speedup(envs: ThreadedVectorEnv, task: str, steps: int) -> float:
+    """Threaded / loop: `envs` (reset) stepped `steps` times against a loop's steps."""
+    actions = np.zeros((envs.num_envs, *envs.single_action_space.shape), np.float32)
+    loop = loop_step_us(task, steps)
+    start = time.perf_counter()
+    for _ in range(steps):
+        envs.step(actions)
+    return loop / ((time.perf_counter() - start) / steps / envs.num_envs * 1e6)
+
+
 def switch_interval_speedups(task: str, num_envs: int, steps: int) -> dict[float, float]:
     """Threaded / loop at several GIL switch intervals (CPython's `sys.setswitchinterval`)."""
     default = sys.getswitchinterval()
     out = {}
     envs = ThreadedVectorEnv([functools.partial(_make_env, task)] * num_envs)
     envs.reset(seed=0)
-    actions = np.zeros((num_envs, *envs.single_action_space.shape), np.float32)
     try:
         for interval in (0.005, 0.0005, 0.00005):
             sys.setswitchinterval(interval)
-            loop = loop_step_us(task, steps)
-            start = time.perf_counter()
-            for _ in range(steps):
-                envs.step(actions)
-            threaded = (time.perf_counter() - start) / steps / num_envs * 1e6
-            out[interval] = loop / threaded
+            out[interval] = _threaded_speedup(envs, task, steps)
     finally:
         sys.setswitchinterval(default)
         envs.close()
+    return out
+
+
+def thread_count_speedups(task: str, num_envs: int, steps: int, cores: int) -> dict[int, float]:
+    """Threaded / loop with 2, 4, 8, ... threads up to min(N, cores): whether fewer
+    threads than cores, each stepping a larger shard, convoy less on the GIL."""
+    counts = [2**e for e in range(1, 12) if 2**e < min(num_envs, cores)] + [min(num_envs, cores)]
+    out = {}
+    for count in counts:
+        envs = ThreadedVectorEnv([functools.partial(_make_env, task)] * num_envs, count)
+        envs.reset(seed=0)
+        try:
+            out[count] = _threaded_speedup(envs, task, steps)
+        finally:
+            envs.close()
     return out
 
 
@@ -321,6 +342,11 @@ def main() -> None:
         "--no-switch-intervals",
         action="store_true",
         help="leave out the GIL switch interval sweep (which builds the largest N again)",
+    )
+    parser.add_argument(
+        "--no-thread-counts",
+        action="store_true",
+        help="leave out the sweep over thread counts (which builds the largest N once per count)",
     )
     args = parser.parse_args()
     cores = os.cpu_count() or 1
@@ -378,6 +404,12 @@ def main() -> None:
         print(
             f"threaded/loop at N = {max(sizes)} by GIL switch interval: "
             + ", ".join(f"{interval * 1e3:g} ms {s:.2f}x" for interval, s in speedups.items())
+        )
+    if not args.no_thread_counts and min(max(sizes), cores) > 1:
+        speedups = thread_count_speedups(args.task, max(sizes), args.steps, cores)
+        print(
+            f"threaded/loop at N = {max(sizes)} by threads: "
+            + ", ".join(f"{count} {s:.2f}x" for count, s in speedups.items())
         )
     hand_off = min(hand_offs) if hand_offs else 0.0
     c = args.model_cores
