@@ -3,8 +3,9 @@
 # table (a loop, Gymnasium's AsyncVectorEnv and SyncVectorEnv, the threaded env and the
 # lock-step ceiling) for reach_site_features at N = 1 to 64 and reach_site_vision at N = 1
 # to 16 (its frames render with EGL), then the threaded env's profile (hand-offs, waits,
-# renders in flight, and the speed at N = 32 with 2 to 16 threads). Prints the tables
-# and, when $OUT is set, writes each under $OUT too.
+# renders in flight; the speed at N = 32 with 2 to 16 threads, and vision's at N = 16 with
+# 1 to 16 renders allowed at once). Prints the tables and, when $OUT is set, writes each
+# under $OUT too.
 #
 # Usage: bash benchmarks/cores_check.sh
 # Set-up, the first that applies:
@@ -47,7 +48,7 @@ echo "cores: $(nproc), load: $(cut -d' ' -f1 /proc/loadavg)"
 $python -c "import mujoco, numpy, gymnasium
 print('mujoco', mujoco.__version__, 'numpy', numpy.__version__, 'gymnasium', gymnasium.__version__)"
 
-# Each part has its own time limit (490 s in all).
+# Each part has its own time limit (500 s in all).
 echo "== vector envs on $(nproc) cores: features"
 timeout 200 $python benchmarks/vector_env.py --tasks reach_site_features \
   --sizes 1,4,8,16,32,64 --repeats 3 --steps 20 --no-ray 2>&1 | tee "$out/features.txt"
@@ -57,6 +58,6 @@ timeout 120 $python benchmarks/vector_env.py --tasks reach_site_vision --no-over
 echo "== where the threaded env's time goes"
 timeout 120 $python benchmarks/vector_env_profile.py --sizes 4,16,32 --steps 20 2>&1 \
   | tee "$out/profile.txt"
-echo "== the threaded vision env: renders in flight at once on $(nproc) threads"
-timeout 50 $python benchmarks/vector_env_profile.py --task reach_site_vision --sizes 16 \
-  --steps 10 --no-switch-intervals 2>&1 | tee "$out/profile_vision.txt"
+echo "== the threaded vision env: renders in flight, and capped, on $(nproc) threads"
+timeout 60 $python benchmarks/vector_env_profile.py --task reach_site_vision --sizes 16 \
+  --steps 10 --no-switch-intervals --no-thread-counts 2>&1 | tee "$out/profile_vision.txt"

@@ -35,7 +35,9 @@ releases per sub-environment step (calls into `mujoco` and ctypes, each releasin
 and taking it back, counted with `sys.setprofile`); and the threaded env's speed over the
 loop's at the largest N, at GIL switch intervals of 5 ms (CPython's default), 0.5 ms and
 0.05 ms, and with 2, 4, 8, ... threads up to one per core (fewer threads than cores,
-each with a larger shard: fewer threads contending for the GIL).
+each with a larger shard: fewer threads contending for the GIL); for a task that renders,
+also with at most 1, 2, 4, ... renders in flight at once (a semaphore around
+`mujoco.Renderer.render`): whether the threads' GL contexts contend for one GPU.
 
 Last, a model of c cores (default 16): a vector step takes
   max(ceil(N / c) * (M + P), N * P) + (min(N, c) - 1) * h
@@ -43,7 +45,7 @@ Last, a model of c cores (default 16): a vector step takes
 one thread at a time, h: one hand-off), against N * (M + P) for a loop.
 
 Usage: python benchmarks/vector_env_profile.py [--task T] [--sizes 4,16,32] [--steps N]
-    [--model-cores 16] [--no-switch-intervals] [--no-thread-counts]
+    [--model-cores 16] [--no-switch-intervals] [--no-thread-counts] [--no-render-caps]
 """
 
 import argparse
@@ -54,6 +56,7 @@ import os
 import pathlib
 import statistics
 import sys
+import threading
 import time
 
 # `import manipulation` finds the package rather than benchmarks/manipulation.py.
@@ -110,6 +113,29 @@ class _RenderSpans:
                 end = max(end, next_end)
         busy += end - start
         return sum(b - a for a, b in spans) / busy if busy > 0 else 1.0
+
+
+class _RenderCap:
+    """While installed, at most `limit` `mujoco.Renderer.render` calls run at once (a
+    semaphore around each): how the threaded vision env fares when its threads' renders
+    queue for the GL driver rather than all going at once."""
+
+    def __init__(self, limit: int):
+        self._slots = threading.BoundedSemaphore(limit)
+        self._original = mujoco.Renderer.render
+
+    def __enter__(self) -> "_RenderCap":
+        original, slots = self._original, self._slots
+
+        def capped(renderer, *args, **kwargs):
+            with slots:
+                return original(renderer, *args, **kwargs)
+
+        mujoco.Renderer.render = capped
+        return self
+
+    def __exit__(self, *exc_info) -> None:
+        mujoco.Renderer.render = self._original
 
 
 class _Timings:
@@ -323,6 +349,23 @@ def thread_count_speedups(task: str, num_envs: int, steps: int, cores: int) -> d
     return out
 
 
+def render_cap_speedups(task: str, num_envs: int, steps: int) -> dict[int, float]:
+    """Threaded / loop with at most 1, 2, 4, ... renders in flight, up to one per thread
+    (no cap), for a task whose observations render."""
+    envs = ThreadedVectorEnv([functools.partial(_make_env, task)] * num_envs)
+    envs.reset(seed=0)
+    k = envs.num_threads
+    limits = [2**e for e in range(12) if 2**e < k] + [k]
+    out = {}
+    try:
+        for limit in limits:
+            with _RenderCap(limit):
+                out[limit] = _threaded_speedup(envs, task, steps)
+    finally:
+        envs.close()
+    return out
+
+
 def modelled_speedup(
     num_envs: int, cores: int, mujoco_us: float, python_us: float, hand_off_us: float
 ) -> float:
@@ -347,6 +390,11 @@ def main() -> None:
         "--no-thread-counts",
         action="store_true",
         help="leave out the sweep over thread counts (which builds the largest N once per count)",
+    )
+    parser.add_argument(
+        "--no-render-caps",
+        action="store_true",
+        help="leave out the sweep over renders allowed in flight at once (a rendering task)",
     )
     args = parser.parse_args()
     cores = os.cpu_count() or 1
@@ -410,6 +458,13 @@ def main() -> None:
         print(
             f"threaded/loop at N = {max(sizes)} by threads: "
             + ", ".join(f"{count} {s:.2f}x" for count, s in speedups.items())
+        )
+    renders = any(row["renders_in_flight"] is not None for row in rows.values())
+    if renders and not args.no_render_caps:
+        speedups = render_cap_speedups(args.task, max(sizes), args.steps)
+        print(
+            f"threaded/loop at N = {max(sizes)} by renders allowed in flight at once: "
+            + ", ".join(f"{limit} {s:.2f}x" for limit, s in speedups.items())
         )
     hand_off = min(hand_offs) if hand_offs else 0.0
     c = args.model_cores
