@@ -4,8 +4,9 @@
 # lock-step ceiling) for reach_site_features at N = 1 to 64 and reach_site_vision at N = 1
 # to 16 (its frames render with EGL), then the threaded env's profile (hand-offs, waits,
 # renders in flight; the speed at N = 32 with 2 to 16 threads, and vision's at N = 16 with
-# 1 to 16 renders allowed at once). Prints the tables and, when $OUT is set, writes each
-# under $OUT too.
+# 1 to 16 renders allowed at once), and what stepping the physics of all sub-environments
+# in one mujoco.batch call would give. Prints the tables and, when $OUT is set, writes
+# each under $OUT too.
 #
 # Usage: bash benchmarks/cores_check.sh
 # Set-up, the first that applies:
@@ -50,10 +51,10 @@ print('mujoco', mujoco.__version__, 'numpy', numpy.__version__, 'gymnasium', gym
 
 # Each part has its own time limit (500 s in all).
 echo "== vector envs on $(nproc) cores: features"
-timeout 200 $python benchmarks/vector_env.py --tasks reach_site_features \
+timeout 180 $python benchmarks/vector_env.py --tasks reach_site_features \
   --sizes 1,4,8,16,32,64 --repeats 3 --steps 20 --no-ray 2>&1 | tee "$out/features.txt"
 echo "== vector envs on $(nproc) cores: vision"
-timeout 120 $python benchmarks/vector_env.py --tasks reach_site_vision --no-overhead \
+timeout 100 $python benchmarks/vector_env.py --tasks reach_site_vision --no-overhead \
   --sizes 1,4,8,16 --repeats 2 --steps 10 --no-ray 2>&1 | tee "$out/vision.txt"
 echo "== where the threaded env's time goes"
 timeout 120 $python benchmarks/vector_env_profile.py --sizes 4,16,32 --steps 20 2>&1 \
@@ -61,3 +62,6 @@ timeout 120 $python benchmarks/vector_env_profile.py --sizes 4,16,32 --steps 20 
 echo "== the threaded vision env: renders in flight, and capped, on $(nproc) threads"
 timeout 60 $python benchmarks/vector_env_profile.py --task reach_site_vision --sizes 16 \
   --steps 10 --no-switch-intervals --no-thread-counts 2>&1 | tee "$out/profile_vision.txt"
+echo "== a shard's physics in one call (mujoco.batch): parts measured, whole modelled"
+timeout 40 $python benchmarks/batch_physics_route.py --sizes 1,4,8,16,32,64 2>&1 \
+  | tee "$out/batch_physics_route.txt"
