@@ -108,7 +108,10 @@ def step_sub_env(
     mode = Autoreset.of(autoreset_mode)
     return SubEnvOutcome(
         *advance_sub_env(
-            env, action, bool(mode.resets_before_step(episode_over)), mode is Autoreset.SAME_STEP
+            env,
+            action,
+            bool(mode.resets_before_step(episode_over)),
+            bool(mode.resets_after_step(True)),
         )
     )
 

@@ -13,7 +13,6 @@ from typing import Any
 import gymnasium
 from gymnasium.vector import AutoresetMode
 
-from composer.episode_end import Autoreset
 from composer.gym.rows import attach_row
 from composer.gym.sub_env_vector import SubEnvVectorEnv, advance_sub_env, check_spaces_match
 from composer.gym.thread_pool import PinnedThreadPool
@@ -84,7 +83,7 @@ class ThreadedVectorEnv(SubEnvVectorEnv):
         self._map(attach_row, {i: (row,) for i, row in enumerate(self._rows)})
         # What a step needs of the autoreset mode, decided once (see `_step_one`).
         self._resets_first = bool(self._autoreset.resets_before_step(True))
-        self._resets_at_end = self._autoreset is Autoreset.SAME_STEP
+        self._resets_at_end = bool(self._autoreset.resets_after_step(True))
         self._step_actions: Sequence[Any] = ()
 
     @property
