@@ -308,18 +308,29 @@ def split_step(task: str, steps: int) -> tuple[float, float, float]:
     return total / steps * 1e6, mujoco_time[0] / steps * 1e6, gil_releases
 
 
-def _threaded_speedup(envs: ThreadedVectorEnv, task: str, steps: int) -> float:
-    """Threaded / loop: `envs` (reset) stepped `steps` times against a loop's steps."""
+def _threaded_speedup(envs: ThreadedVectorEnv, loop_us: float, steps: int) -> float:
+    """Threaded / loop: `envs` (reset) stepped `steps` times against `loop_us` a step."""
     actions = np.zeros((envs.num_envs, *envs.single_action_space.shape), np.float32)
-    loop = loop_step_us(task, steps)
     start = time.perf_counter()
     for _ in range(steps):
         envs.step(actions)
-    return loop / ((time.perf_counter() - start) / steps / envs.num_envs * 1e6)
+    return loop_us / ((time.perf_counter() - start) / steps / envs.num_envs * 1e6)
 
 
-def switch_interval_speedups(task: str, num_envs: int, steps: int) -> dict[float, float]:
-    """Threaded / loop at several GIL switch intervals (CPython's `sys.setswitchinterval`)."""
+def _doublings(first: int, last: int) -> list[int]:
+    """first, 2 first, 4 first, ... below `last`, then `last`."""
+    out = []
+    while first < last:
+        out.append(first)
+        first *= 2
+    return out + [last]
+
+
+def switch_interval_speedups(
+    task: str, num_envs: int, steps: int, loop_us: float
+) -> dict[float, float]:
+    """Threaded / loop (`loop_us` a step) at several GIL switch intervals (CPython's
+    `sys.setswitchinterval`)."""
     default = sys.getswitchinterval()
     out = {}
     envs = ThreadedVectorEnv([functools.partial(_make_env, task)] * num_envs)
@@ -327,40 +338,39 @@ def switch_interval_speedups(task: str, num_envs: int, steps: int) -> dict[float
     try:
         for interval in (0.005, 0.0005, 0.00005):
             sys.setswitchinterval(interval)
-            out[interval] = _threaded_speedup(envs, task, steps)
+            out[interval] = _threaded_speedup(envs, loop_us, steps)
     finally:
         sys.setswitchinterval(default)
         envs.close()
     return out
 
 
-def thread_count_speedups(task: str, num_envs: int, steps: int, cores: int) -> dict[int, float]:
-    """Threaded / loop with 2, 4, 8, ... threads up to min(N, cores): whether fewer
-    threads than cores, each stepping a larger shard, convoy less on the GIL."""
-    counts = [2**e for e in range(1, 12) if 2**e < min(num_envs, cores)] + [min(num_envs, cores)]
+def thread_count_speedups(
+    task: str, num_envs: int, steps: int, loop_us: float, cores: int
+) -> dict[int, float]:
+    """Threaded / loop (`loop_us` a step) with 2, 4, 8, ... threads up to min(N, cores):
+    whether fewer threads than cores, each stepping a larger shard, convoy less on the GIL."""
     out = {}
-    for count in counts:
+    for count in _doublings(2, min(num_envs, cores)):
         envs = ThreadedVectorEnv([functools.partial(_make_env, task)] * num_envs, count)
         envs.reset(seed=0)
         try:
-            out[count] = _threaded_speedup(envs, task, steps)
+            out[count] = _threaded_speedup(envs, loop_us, steps)
         finally:
             envs.close()
     return out
 
 
-def render_cap_speedups(task: str, num_envs: int, steps: int) -> dict[int, float]:
-    """Threaded / loop with at most 1, 2, 4, ... renders in flight, up to one per thread
-    (no cap), for a task whose observations render."""
+def render_cap_speedups(task: str, num_envs: int, steps: int, loop_us: float) -> dict[int, float]:
+    """Threaded / loop (`loop_us` a step) with at most 1, 2, 4, ... renders in flight, up
+    to one per thread (no cap), for a task whose observations render."""
     envs = ThreadedVectorEnv([functools.partial(_make_env, task)] * num_envs)
     envs.reset(seed=0)
-    k = envs.num_threads
-    limits = [2**e for e in range(12) if 2**e < k] + [k]
     out = {}
     try:
-        for limit in limits:
+        for limit in _doublings(1, envs.num_threads):
             with _RenderCap(limit):
-                out[limit] = _threaded_speedup(envs, task, steps)
+                out[limit] = _threaded_speedup(envs, loop_us, steps)
     finally:
         envs.close()
     return out
@@ -448,20 +458,20 @@ def main() -> None:
         f"GIL releases (calls into mujoco or ctypes) per sub-env step: {releases:.0f}"
     )
     if not args.no_switch_intervals:
-        speedups = switch_interval_speedups(args.task, max(sizes), args.steps)
+        speedups = switch_interval_speedups(args.task, max(sizes), args.steps, loop_us)
         print(
             f"threaded/loop at N = {max(sizes)} by GIL switch interval: "
             + ", ".join(f"{interval * 1e3:g} ms {s:.2f}x" for interval, s in speedups.items())
         )
     if not args.no_thread_counts and min(max(sizes), cores) > 1:
-        speedups = thread_count_speedups(args.task, max(sizes), args.steps, cores)
+        speedups = thread_count_speedups(args.task, max(sizes), args.steps, loop_us, cores)
         print(
             f"threaded/loop at N = {max(sizes)} by threads: "
             + ", ".join(f"{count} {s:.2f}x" for count, s in speedups.items())
         )
     renders = any(row["renders_in_flight"] is not None for row in rows.values())
     if renders and not args.no_render_caps:
-        speedups = render_cap_speedups(args.task, max(sizes), args.steps)
+        speedups = render_cap_speedups(args.task, max(sizes), args.steps, loop_us)
         print(
             f"threaded/loop at N = {max(sizes)} by renders allowed in flight at once: "
             + ", ".join(f"{limit} {s:.2f}x" for limit, s in speedups.items())
