@@ -54,6 +54,30 @@ class AttributeChange(NamedTuple):
     attribute: str
 
 
+class AttributeChanges(tuple):
+    """The `AttributeChange`s of a model since a modification count, in the order of their
+    last changes (`RootElement.attribute_changes_since`): a tuple that also says whether
+    each attribute was set at that count.
+
+    Attributes:
+      root: the model whose record the changes come from.
+      since: the modification count they are counted from.
+    """
+
+    root: RootElement
+    since: int
+
+    def __new__(cls, changes, root: RootElement, since: int):
+        self = super().__new__(cls, changes)
+        self.root = root
+        self.since = since
+        return self
+
+    def was_set_before(self, change: AttributeChange) -> bool:
+        """Whether `change`'s element had its own value of the attribute at `since`."""
+        return self.root.attribute_was_set_at(change, self.since)
+
+
 class _UnknownAttributeError(AttributeError):
     """AttributeError whose message (with close matches) is only built when shown.
 
@@ -272,8 +296,14 @@ class Element:
         if name.startswith("_"):
             object.__setattr__(self, name, value)
             return
+        self._set_one(name, value)
+
+    def _set_one(self, name: str, value) -> None:
+        """Sets (None: unsets) one attribute by Python name and records the change."""
+        spec = self._spec.python_attributes.get(name)
+        was_set = spec is not None and spec.name in self._attributes
         self._set_attribute(name, value)
-        self._changed(self._spec.python_attributes[name].name)
+        self._changed(spec.name, was_set=(was_set,))
 
     def __delattr__(self, name: str) -> None:
         """Unsets an attribute, or removes a single child (`del root.option`)."""
@@ -291,8 +321,7 @@ class Element:
             if child is not None:
                 child.remove()
             return
-        self._set_attribute(name, None)
-        self._changed(self._spec.python_attributes[name].name)
+        self._set_one(name, None)
 
     def __dir__(self):
         names = set(super().__dir__())
@@ -345,8 +374,7 @@ class Element:
         if len(attributes) == 1:
             # One attribute (a variator's colour at every reset): nothing to roll back.
             ((name, value),) = attributes.items()
-            self._set_attribute(name, value)
-            self._changed(self._spec.python_attributes[name].name)
+            self._set_one(name, value)
             return
         done = []
         try:
@@ -362,7 +390,10 @@ class Element:
         finally:
             if done:
                 python_attributes = self._spec.python_attributes
-                self._changed(*(python_attributes[name].name for name, _ in done))
+                self._changed(
+                    *(python_attributes[name].name for name, _ in done),
+                    was_set=tuple(previous is not None for _, previous in done),
+                )
 
     def get_attribute_xml_string(self, attribute_name: str, prefix_root=None) -> str | None:
         """The attribute's value as it is written to XML, or None when unset."""
@@ -826,12 +857,14 @@ class Element:
 
     # --------------------------------------------------------------------- bookkeeping
 
-    def _changed(self, *attributes: str) -> None:
+    def _changed(self, *attributes: str, was_set: tuple[bool, ...] | None = None) -> None:
         """Invalidates cached text and counts a modification in every enclosing model.
 
         `attributes` names the XML attributes of this element whose values changed, when
         that is all that changed; without them the change is structural (see
-        `RootElement.attribute_changes_since`).
+        `RootElement.attribute_changes_since`). `was_set` says, for each, whether this
+        element had its own value of it before the change (None: it stays as it was, a
+        value written in place).
         """
         _set_slot(self, "_xml_cache", None)
         # The cached text of every element that encloses this one (across attachments)
@@ -845,7 +878,7 @@ class Element:
         model = self._root
         while model is not None:
             model._modification_count += 1
-            model._note_change(self, attributes)
+            model._note_change(self, attributes, was_set)
             frame = model._frame
             model = frame._root if frame is not None else None
 
@@ -1051,7 +1084,9 @@ class RootElement(Element):
     adding, removing, attaching, copying, committing defaults), so that a compiled model
     can be brought up to date without recompiling (`attribute_changes_since`). The record
     holds at most `_MAX_RECORDED_CHANGES` distinct (element, attribute) pairs; beyond that
-    it is dropped and counts as a structural change.
+    it is dropped and counts as a structural change. It also keeps when an attribute went
+    from unset to set or back, so that a patch can tell a value that replaces another from
+    one set where nothing was (`attribute_was_set_at`).
     """
 
     __slots__ = (
@@ -1061,6 +1096,7 @@ class RootElement(Element):
         "_modification_count",
         "_structure_count",
         "_attribute_changes",
+        "_set_flips",
         "_files_count",
         "_xml_string_cache",
         "_assets_cache",
@@ -1077,6 +1113,7 @@ class RootElement(Element):
         self._modification_count = 0
         self._structure_count = 0
         self._attribute_changes = {}
+        self._set_flips = {}
         self._files_count = 0
         self._xml_string_cache = None
         self._assets_cache = None
@@ -1088,6 +1125,7 @@ class RootElement(Element):
         self._modification_count = 0
         self._structure_count = 0
         self._attribute_changes.clear()
+        self._set_flips.clear()
 
     @property
     def modification_count(self) -> int:
@@ -1100,29 +1138,50 @@ class RootElement(Element):
           count: an earlier `modification_count` of this model.
 
         Returns:
-          An `AttributeChange` for each attribute whose value was set or unset since
-          `count`, each once, in the order of their last changes, when nothing else
-          changed; an empty tuple when nothing changed at all; None when the model's
+          `AttributeChanges`: an `AttributeChange` for each attribute whose value was set
+          or unset since `count`, each once, in the order of their last changes, when
+          nothing else changed; an empty tuple when nothing changed at all; None when the model's
           structure changed since `count` (or the record of changes was dropped), so that
           only a recompile can tell the difference.
         """
         if count < self._structure_count or count > self._modification_count:
             return None
-        return tuple(pair for pair, when in self._attribute_changes.items() if when > count)
+        return AttributeChanges(
+            (pair for pair, when in self._attribute_changes.items() if when > count), self, count
+        )
 
-    def _note_change(self, element: Element, attributes: tuple[str, ...]) -> None:
+    def attribute_was_set_at(self, change: AttributeChange, count: int) -> bool:
+        """Whether `change.element` had its own value of `change.attribute` when this model's
+        modification count was `count` (a count `attribute_changes_since(count)` accepts)."""
+        for flip_count, was_set in self._set_flips.get(change, ()):
+            if flip_count > count:
+                return was_set
+        return change.attribute in change.element._attributes
+
+    def _note_change(
+        self, element: Element, attributes: tuple[str, ...], was_set: tuple[bool, ...] | None
+    ) -> None:
         """Records a change counted in `_modification_count` (see the class docstring)."""
         changes = self._attribute_changes
         if not attributes or len(changes) + len(attributes) > _MAX_RECORDED_CHANGES:
             self._structure_count = self._modification_count
             changes.clear()
+            self._set_flips.clear()
             return
         count = self._modification_count
-        for attribute in attributes:
+        for index, attribute in enumerate(attributes):
             # Re-inserted, so that the record stays ordered by the time of the last change.
             change = AttributeChange(element, attribute)
             changes.pop(change, None)
             changes[change] = count
+            if was_set is not None and was_set[index] != (attribute in element._attributes):
+                # Set where it was unset, or the reverse: what it was before `count`.
+                flips = self._set_flips.setdefault(change, [])
+                flips.append((count, was_set[index]))
+                if len(flips) > _MAX_RECORDED_CHANGES:
+                    self._structure_count = count
+                    changes.clear()
+                    self._set_flips.clear()
 
     @property
     def parent_model(self) -> RootElement | None:

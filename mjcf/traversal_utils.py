@@ -153,6 +153,13 @@ def default_value_source(element: Element, xml_name: str) -> Element | None:
     """
     if xml_name in element._attributes:
         return element
+    return class_value_source(element, xml_name)
+
+
+def class_value_source(element: Element, xml_name: str) -> Element | None:
+    """The template under the most specific of `element`'s default classes that sets
+    attribute `xml_name`, whatever `element` sets itself; None as `default_value_source`
+    gives it."""
     tags = _default_tags(element)
     if tags != (element._spec.name,):
         return None
