@@ -7,7 +7,7 @@ import mujoco
 
 from mjcf import binding as binding_module
 from mjcf.appearance import changes_are_forward_neutral, forward_neutral_fields
-from mjcf.patching import model_patch
+from mjcf.patching import first_use_proof
 from mjcf.patching.geom_size_cache import SizePatchCache
 from mujoco_physics import engine
 from mujoco_physics.engine import PhysicsError
@@ -159,12 +159,16 @@ class Physics(engine.Physics):
         Returns:
           True when the model now equals a fresh compile of the changed MJCF model; its
           data is then to be reset, as after a compile. False, having changed nothing, when
-          a change is not one that `mjcf.patching.model_patch` can write (then recompile).
+          a change is not one that `mjcf.patching.model_patch` can write, or one in a
+          context no proof covers fails the proof made of it now on this model
+          (`mjcf.patching.first_use_proof`): then recompile.
 
         What patches look up in the compiled model is kept for the next call, until
         this Physics loads another model (`mjcf.patching.geom_size_cache`).
         """
-        return model_patch.patch_model(self, changes, cache=self._size_patch_cache)
+        return first_use_proof.patch(
+            self, changes, cache=self._size_patch_cache, recompile=compile_mjcf_model
+        )
 
     def changes_are_forward_neutral(self, changes) -> bool:
         """Whether every (element, XML attribute name) change compiles only into fields that

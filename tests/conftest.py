@@ -1,11 +1,13 @@
-"""Test-wide set-up: headless rendering through EGL unless the user chose a backend, a
-virtual X display for the tests that open windows, recorders of compiles and resets, and a
-fresh interpreter for what a process without an optional library sees."""
+"""Test-wide set-up: headless rendering through EGL unless the user chose a backend, an empty
+cache of patch proofs, a virtual X display for the tests that open windows, recorders of
+compiles and resets, and a fresh interpreter for what a process without an optional library
+sees."""
 
 import os
 import shutil
 import subprocess
 import sys
+import tempfile
 import textwrap
 from collections.abc import Callable
 
@@ -26,7 +28,6 @@ _WARP_WARM_UP = "tests/composer/batch/test_batch_physics.py"
 def pytest_collection_modifyitems(config, items):
     if config.pluginmanager.hasplugin("xdist"):
         _order_warp_tests_for_two_workers(items)
-    _skip_the_patch_table_off_its_release(items)
 
 
 def _order_warp_tests_for_two_workers(items):
@@ -56,23 +57,30 @@ def _order_warp_tests_for_two_workers(items):
     items[:] = warm_up + rest + [item for group in last for item in group]
 
 
-def _skip_the_patch_table_off_its_release(items):
-    # The checked-in patch table is proven on one MuJoCo release; on another it does not
-    # apply (a proof cached by `python -m manipulation.patch_proof` may), so what it promises is
-    # not there to check.
-    import mujoco
-
-    from mjcf.patching import patchable_attributes
-
-    if mujoco.__version__ == patchable_attributes.MUJOCO_VERSION:
-        return
-    skip = pytest.mark.skip(
-        reason=f"mjcf/patching/patchable_attributes.py is proven on mujoco "
-        f"{patchable_attributes.MUJOCO_VERSION}, not on the installed {mujoco.__version__}"
+def pytest_addoption(parser):
+    parser.addoption(
+        "--patch-table-elsewhere",
+        action="store_true",
+        help="pretend that the checked-in patch table (mjcf/patching/patchable_attributes.py) "
+        "was proven on another MuJoCo release, so that every patch is proven at first use "
+        "(.ci/run runs the patching tests so, beside the default run)",
     )
-    for item in items:
-        if "patch_table" in item.keywords:
-            item.add_marker(skip)
+
+
+def pytest_configure(config):
+    # An empty cache of patch proofs for the session, as a new user has (each xdist worker
+    # its own): nothing a test proves reaches the user's cache, and no test relies on what
+    # an earlier run cached.
+    config._composer_cache = tempfile.mkdtemp(prefix="composer-test-cache-")
+    os.environ["XDG_CACHE_HOME"] = config._composer_cache
+    if config.getoption("--patch-table-elsewhere"):
+        from mjcf.patching import patchable_attributes
+
+        patchable_attributes.MUJOCO_VERSION = "0.0.0-elsewhere"
+
+
+def pytest_unconfigure(config):
+    shutil.rmtree(getattr(config, "_composer_cache", ""), ignore_errors=True)
 
 
 @pytest.fixture(scope="session")
@@ -135,7 +143,8 @@ def physics_resets(monkeypatch) -> list:
 @pytest.fixture
 def fresh_python() -> Callable[[str], subprocess.CompletedProcess]:
     """Runs a snippet of Python (dedented) in a new interpreter whose environment holds only
-    `MUJOCO_GL=egl` and an empty PATH; returns the finished process, its output as text.
+    `MUJOCO_GL=egl`, an empty PATH and the session's cache directory; returns the finished
+    process, its output as text.
 
     For what importing a package does, or what a missing optional library looks like
     (`sys.modules[name] = None` in the snippet), where this process has already imported it.
@@ -147,7 +156,7 @@ def fresh_python() -> Callable[[str], subprocess.CompletedProcess]:
             capture_output=True,
             text=True,
             check=False,
-            env={"MUJOCO_GL": "egl", "PATH": ""},
+            env={"MUJOCO_GL": "egl", "PATH": "", "XDG_CACHE_HOME": os.environ["XDG_CACHE_HOME"]},
         )
 
     return run

@@ -2,10 +2,9 @@
 
 A CPU `composer.Environment` brings its model up to date at every reset: the
 `initialize_episode_mjcf` hooks (an `MJCFVariator`) change MJCF attributes, and the changes
-of attributes proven patchable (`mjcf.patching.model_patch`, with the proof
-`mjcf.patching.patch_table` finds for the installed MuJoCo, made by
-`python -m manipulation.patch_proof`) are written into the compiled model, followed by
-`mj_setConst` where the table marks the attribute; the `initialize_episode` hooks (a
+proven patchable (`mjcf.patching.model_patch`, with the proofs `mjcf.patching.patch_table`
+keeps for the installed MuJoCo, or one made on the model at first use) are written into the
+compiled model, followed by `mj_setConst` where the proof says so; the `initialize_episode` hooks (a
 `PhysicsVariator`) then write model fields through `physics.bind`. A batch compiles once and
 does the same for each world: the initial-state producer that makes a world's episode runs
 both hooks on its host physics with that world's generator (`EpisodeModel` for the first),
@@ -22,11 +21,12 @@ changed, and every field whose values differ between the two probes (derived con
 host (`per_world_fields`).
 
 Refused, with NotImplementedError naming the element and attribute (at construction, or
-where a producer first meets it): a change of the MJCF model's structure; an attribute the
-proof does not cover, with the proof's reason; any MJCF change when the table was proven on
-another MuJoCo release; a field that varies per world but that MuJoCo Warp shares between
-worlds. A refused attribute's message says how to draw it per world instead (a write of its
-compiled field in `initialize_episode`; `REFUSAL_DOCS`).
+where a producer first meets it): a change of the MJCF model's structure; an attribute whose
+change cannot be written in place, with the proof's reason (a change no proof covers is
+proven on the host model first, as a CPU environment's reset proves it:
+`mjcf.patching.first_use_proof`); a field that varies per world but that MuJoCo Warp shares
+between worlds. A refused attribute's message says how to draw it per world instead (a
+write of its compiled field in `initialize_episode`; `REFUSAL_DOCS`).
 
 The rule for producers: one producer's MJCF tree serves every world whose episodes it makes,
 so each episode must set every attribute that any episode varies (as `MJCFVariator` does: it
@@ -44,7 +44,8 @@ import numpy as np
 import mjcf
 from composer.hooks import EnvironmentHooks
 from mjcf import binding
-from mjcf.patching import patch_table, patchable_attributes
+from mjcf.patching import first_use_proof, patch_table
+from mjcf.patching.patch_context import context_of
 from mujoco_physics import field_layout
 
 __all__ = ["EpisodeModel", "PerWorldFields", "measure", "model_arrays", "per_world_fields"]
@@ -61,26 +62,32 @@ def model_arrays(model: mujoco.MjModel) -> dict[str, np.ndarray]:
     return {name: getattr(model, name).copy() for name in field_layout.MODEL_FIELDS.arrays}
 
 
-def _unpatchable_reason(element, attribute: str) -> str | None:
-    """Why a change of `element`'s `attribute` cannot be written in place, or None."""
+def _unpatchable_reason(changes) -> tuple[object, str, str]:
+    """The change of `changes` that recompiles, and why (after the patch said False)."""
     table = patch_table.current()
-    if table is None:
-        return (
-            f"no proof of the attributes written in place applies to mujoco "
-            f"{mujoco.__version__} (the checked-in one is of mujoco "
-            f"{patchable_attributes.MUJOCO_VERSION}; `{patch_table.PROOF_COMMAND}` proves "
-            "them on this release)"
-        )
-    pair = (element.tag, attribute)
-    if pair in table.proven:
-        return None
-    why = table.refused.get(pair)
-    if why is None:
-        return "the proof does not cover it (its compiled value is not the attribute's)"
-    if " " not in why.split(",")[0]:
-        # The fields the proof found a write in place cannot make equal to a recompile's.
-        why = f"what the compiler derives from it differs from a write in place: {why}"
-    return f"the proof refuses it: {why}"
+    for change in changes:
+        element, attribute = change
+        why = table.pair_verdict((element.tag, attribute))
+        if isinstance(why, str):
+            if " " not in why.split(",")[0]:
+                # The fields the proof found a write in place cannot make equal to a
+                # recompile's.
+                why = f"what the compiler derives from it differs from a write in place: {why}"
+            return element, attribute, f"the proof refuses it: {why}"
+    group_reason = first_use_proof.refusal_reason(changes)
+    if group_reason is not None:
+        refused = set().union(*table.refused_together)
+        for change in changes:
+            if context_of(change, changes) in refused:
+                return change.element, change.attribute, f"the proof refuses it: {group_reason}"
+    element, attribute = changes[0]
+    described = ", ".join(f"{binding.describe(e)} {a!r}" for e, a in changes)
+    return (
+        element,
+        attribute,
+        "the proof does not cover it: mjcf.patching.model_patch cannot write these changes "
+        f"in place (a compiled value that is not the attribute's alone): {described}",
+    )
 
 
 #: Where the docs say what to do about a refused variation.
@@ -162,18 +169,8 @@ class EpisodeModel:
                 "batch's worlds share a producer's MJCF tree, so every episode must set every "
                 "attribute it varies (as an MJCFVariator does)"
             )
-        for element, attribute in changes:
-            reason = _unpatchable_reason(element, attribute)
-            if reason is not None:
-                raise _refusal(element, attribute, reason)
         if not self._physics.apply_attribute_changes(changes):
-            element, attribute = changes[0]
-            described = ", ".join(f"{binding.describe(e)} {a!r}" for e, a in changes)
-            raise _refusal(
-                element,
-                attribute,
-                f"mjcf.patching.model_patch cannot write these changes in place: {described}",
-            )
+            raise _refusal(*_unpatchable_reason(changes))
         self.changes = changes
 
 

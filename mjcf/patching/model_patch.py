@@ -2,15 +2,12 @@
 
 A change of an attribute value whose compiled field is the value itself (a colour, a
 friction, a gain, ...) does not need MuJoCo's compiler: writing the value into the field
-gives the same `MjModel` a recompile would. Which (tag, attribute) pairs are like that is
-not decided here but proven, for the installed MuJoCo, by `mjcf.patching.patch_proof`: it
-changes each candidate attribute on real models, patches one copy, recompiles another and
-requires every `MjModel` array and every `MjData` array after `mj_forward` to be
-bit-identical. The proven pairs, with, for each, whether `mj_setConst` must run after the
-write (for fields MuJoCo derives constants from, such as masses), are the generated table
-`mjcf/patching/patchable_attributes.py` on the release it was proven on (CI fails when it is
-stale), or a proof cached for the installed release: `mjcf.patching.patch_table` says which
-applies. Where none does, nothing is patched, and the first look warns.
+gives the same `MjModel` a recompile would. Which changes are like that is not decided
+here but proven, for the installed MuJoCo: by the corpus proof `mjcf.patching.patch_proof`
+(the checked-in table `mjcf/patching/patchable_attributes.py` on its release), or on the
+model at hand at first use (`mjcf.patching.first_use_proof`, which calls this with what the
+proofs say). Each proven pair comes with whether `mj_setConst` must run after the write
+(for fields MuJoCo derives constants from, such as masses).
 
 A change is patched when every changed (element, attribute) of
 `RootElement.attribute_changes_since` is proven, compiled into the Physics and resolvable:
@@ -41,11 +38,11 @@ import numpy as np
 
 from mjcf import attribute_types, binding, traversal_utils
 from mjcf.element import Element
-from mjcf.patching import geom_size_patch, model_statistics, patch_table
+from mjcf.patching import geom_size_patch, model_statistics
 from mjcf.patching.geom_size_cache import ElementsUsing, FieldTarget, SizePatchCache
 from mujoco_physics.field_layout import MODEL
 
-__all__ = ["patch_supported", "patch_model"]
+__all__ = ["patch_model"]
 
 
 _Write = geom_size_patch.FieldWrite
@@ -72,14 +69,7 @@ _CLASS_ATTRIBUTES = ("class", "childclass")
 _UNKNOWN = object()
 
 
-def patch_supported() -> bool:
-    """Whether a proof applies to the installed MuJoCo (see `mjcf.patching.patch_table`)."""
-    return patch_table.current() is not None
-
-
-def patch_model(
-    physics, changes, *, cache: SizePatchCache | None = None, proven: dict | None = None
-) -> bool:
+def patch_model(physics, changes, *, proven: dict, cache: SizePatchCache | None = None) -> bool:
     """Writes the compiled values of changed attributes into `physics`'s model.
 
     Args:
@@ -88,8 +78,9 @@ def patch_model(
       changes: (element, XML attribute name) pairs, as `attribute_changes_since` gives them.
       cache: what earlier patches of `physics`'s compiled model looked up (see
         `mjcf.patching.geom_size_cache`); None looks everything up afresh.
-      proven: (tag, attribute) -> whether `mj_setConst` must follow, in place of the
-        table that applies (for the proof, which decides what a table holds).
+      proven: (tag, attribute) -> whether `mj_setConst` must follow, for every pair a
+        change may patch: what the proofs say of these changes
+        (`mjcf.patching.first_use_proof`), or what a proof tries.
 
     Returns:
       True when the model now equals a fresh compile (the physics' data is left to the
@@ -98,11 +89,6 @@ def patch_model(
       having changed nothing, when some change cannot be patched (see the module
       docstring).
     """
-    if proven is None:
-        table = patch_table.current()
-        if table is None:
-            return False
-        proven = table.proven
     if cache is None:
         cache = SizePatchCache()
     writes = []

@@ -45,13 +45,17 @@ import numpy as np
 import mjcf
 from mjcf import attribute_types, schema, traversal_utils
 from mjcf.element import Element
-from mjcf.patching import model_patch, patch_table, patchable_attributes
+from mjcf.patching import (
+    model_comparison,
+    model_patch,
+    patch_context,
+    patch_table,
+    patchable_attributes,
+)
 from mjcf.physics import compile_mjcf_model
-from mujoco_physics.field_layout import DATA_FIELDS, FAMILIES, MODEL, MODEL_FIELDS
+from mujoco_physics.field_layout import FAMILIES, MODEL
 
 _NOT_IN_CORPUS = "no model of the corpus has it"
-# How many forwards of copies of a model tell its scratch arrays (see `_scratch_arrays`).
-_SCRATCH_RUNS = 6
 _TABLE = Path(patchable_attributes.__file__)
 
 # Scenes besides the manipulation tasks, one MJCF file each (each says what it covers):
@@ -138,33 +142,12 @@ _FROM_UNSET = "a value nothing sets (MuJoCo's built-in default)"
 
 
 def _variety(element, pair) -> tuple:
-    """What sets apart elements of one kind of change that are each worth a change.
-
-    For a geom's size (which feeds its bounds, its body's BVH and its body's inertia): the
-    geom's type, whether it is given by `fromto`, and whether its body has an explicit
-    inertial; every template. For a position or quaternion: whether `fromto` gives it and
-    whether the element is a body with a free joint. For any other pair, nothing: one
-    element of a kind suffices.
-    """
-    if pair[1] in ("pos", "quat"):
-        # Poses the patch declines (a free body's, a segment's) and those it writes.
-        return (
-            traversal_utils.default_value_source(element, "fromto") is not None
-            if "fromto" in element._spec.attributes
-            else False,
-            bool(element.get_children("freejoint")) if element._spec.name == "body" else False,
-        )
-    if pair != ("geom", "size"):
-        return ()
-    if traversal_utils.is_default_template(element):
+    """What sets apart elements of one kind of change that are each worth a change: the
+    context's variety (`mjcf.patching.patch_context.variety`), and for a geom's size every
+    template."""
+    if pair == ("geom", "size") and traversal_utils.is_default_template(element):
         return (id(element),)
-    body = element._parent
-    type_source = traversal_utils.default_value_source(element, "type")
-    return (
-        type_source._attributes["type"] if type_source is not None else "sphere",
-        traversal_utils.default_value_source(element, "fromto") is not None,
-        body._spec.name == "body" and bool(body.get_children("inertial")),
-    )
+    return patch_context.variety(element, pair[1])
 
 
 def _sites(root, candidates) -> dict:
@@ -219,70 +202,6 @@ def _current_value(root, base, element, name: str):
         return None
 
 
-def _model_arrays(model: mujoco.MjModel) -> dict[str, bytes]:
-    """Every array (of numbers or characters) and size (`ngravcomp`, ...) of `model`, and
-    its structs' fields, as bytes."""
-    fields = MODEL_FIELDS.arrays + MODEL_FIELDS.texts + MODEL_FIELDS.scalars
-    arrays = {name: np.asarray(getattr(model, name)).tobytes() for name in fields}
-    for struct in MODEL_FIELDS.structs:
-        arrays.update(_struct_bytes(struct, getattr(model, struct)))
-    return arrays
-
-
-def _struct_bytes(label: str, struct) -> dict[str, bytes]:
-    """The fields of a MuJoCo struct (nested ones flattened) as bytes, keyed 'opt.timestep'."""
-    found = {}
-    for name in dir(struct):
-        if name.startswith("_"):
-            continue
-        value = getattr(struct, name)
-        if isinstance(value, (int, float, np.ndarray)):
-            found[f"{label}.{name}"] = np.asarray(value).tobytes()
-        elif not callable(value) and not isinstance(value, type):
-            found.update(_struct_bytes(f"{label}.{name}", value))
-    return found
-
-
-def _data_arrays(model: mujoco.MjModel, data: mujoco.MjData) -> dict[str, bytes]:
-    """MjData arrays after a reset and `mj_forward`."""
-    mujoco.mj_resetData(model, data)
-    mujoco.mj_forward(model, data)
-    return {name: getattr(data, name).tobytes() for name in DATA_FIELDS.arrays}
-
-
-def _scratch_arrays(model: mujoco.MjModel) -> frozenset[str]:
-    """The MjData arrays that `mj_forward` leaves unwritten on `model`: those that differ
-    between forwards of copies of it.
-
-    Such an array holds what its memory held before, scratch of earlier work with addresses
-    among it, which is no function of the model's values. On mujoco 3.3.0, where island
-    discovery is off unless enabled, that is the island arrays (`dof_island`,
-    `efc_island`, `island_dofind`, `island_efcind`) and `efc_AR_rowadr`/`efc_AR_rownnz`;
-    compared as they were, they refused every pair there. Two forwards can leave the same
-    scratch by chance, hence several.
-    """
-    data = mujoco.MjData(model)
-    runs = [_data_arrays(copy.copy(model), data) for _ in range(_SCRATCH_RUNS)]
-    return frozenset(
-        name for name in runs[0] if any(run[name] != runs[0][name] for run in runs[1:])
-    )
-
-
-def _differences(patched: mujoco.MjModel, compiled: mujoco.MjModel) -> list[str]:
-    """The MjModel arrays, then the MjData arrays after mj_forward other than the compiled
-    model's scratch arrays (see `_scratch_arrays`), that are not identical."""
-    model_patched, model_compiled = _model_arrays(patched), _model_arrays(compiled)
-    differing = [name for name in model_compiled if model_patched[name] != model_compiled[name]]
-    data = mujoco.MjData(compiled)
-    data_patched = _data_arrays(patched, data)
-    data_compiled = _data_arrays(compiled, data)
-    suspects = [name for name in data_compiled if data_patched[name] != data_compiled[name]]
-    if suspects:
-        scratch = _scratch_arrays(compiled)
-        differing += [f"data.{name}" for name in suspects if name not in scratch]
-    return differing
-
-
 def _prove_change(root, base, element, pair, record: _Record) -> None:
     """Changes `pair` on `element`, compares the patched and the compiled models, undoes it."""
     name = pair[1]
@@ -323,7 +242,7 @@ def _prove_change(root, base, element, pair, record: _Record) -> None:
             if not model_patch.patch_model(physics, changes, proven={pair: set_const}):
                 record.declined += 1
                 break
-            outcomes.append(_differences(physics.model.ptr, compiled))
+            outcomes.append(model_comparison.differences(physics.model.ptr, compiled))
             if not outcomes[-1]:
                 break
         if outcomes and outcomes[0]:

@@ -1,7 +1,11 @@
 """composer.Environment resets that patch the compiled model instead of recompiling it."""
 
+import os
+import subprocess
+import sys
+from pathlib import Path
+
 import numpy as np
-import pytest
 from composer_scene import ReachTask, assert_same_episodes, play_episodes
 
 import composer
@@ -50,7 +54,6 @@ class MovingTask(ReachTask):
         self.arm.tip.quat = [1, random_state.uniform(-1, 1), 0, 0]
 
 
-@pytest.mark.patch_table
 def test_moved_sites_and_bodies_patch_without_compiling_and_bit_identically(compiles):
     patched_env = composer.Environment(MovingTask(), random_state=3)
     compiled_env = composer.Environment(MovingTask(), random_state=3, patch_compiled_model=False)
@@ -77,7 +80,6 @@ def test_twenty_seeded_episodes_are_bit_identical_with_patching_on_and_off():
     assert patched_env.task.after_compile_calls == compiled_env.task.after_compile_calls == 21
 
 
-@pytest.mark.patch_table
 def test_a_reset_that_changes_only_patchable_values_does_not_compile(monkeypatch, compiles):
     env = composer.Environment(VariedTask(), random_state=3)
     compiles.clear()  # counts from here on
@@ -161,7 +163,6 @@ class BrickTask(ReachTask):
         self.brick.set_pose(physics, position=[0.3, 0.3, 0.0105], quaternion=[1, 0, 0, 0])
 
 
-@pytest.mark.patch_table
 def test_a_default_class_cylinder_radius_drawn_every_episode_patches_bit_identically(
     monkeypatch, compiles
 ):
@@ -183,3 +184,72 @@ def test_a_default_class_cylinder_radius_drawn_every_episode_patches_bit_identic
     for _ in range(3):
         patched_env.reset()
     assert compiles == []
+
+
+# A user's task in a new process, the checked-in table pretended to be another release's and
+# an empty cache: an MJCFVariator recolours the box and moves the goal, the arm's upper body
+# moves, and the ground's friction changes, every episode. Prints the compiles of each reset.
+_USERS_TASK_IN_A_NEW_PROCESS = """
+import sys
+sys.path.insert(0, {scene_folder!r})
+from composer_scene import ReachTask
+import composer
+from composer import variation
+from composer.variation import distributions
+from mjcf import physics as physics_module
+from mjcf.patching import compiled_model, patchable_attributes
+patchable_attributes.MUJOCO_VERSION = "0.0.0-elsewhere"
+compiles = []
+original = physics_module.compile_mjcf_model
+def recording(root):
+    compiles.append(root)
+    return original(root)
+physics_module.compile_mjcf_model = compiled_model.compile_mjcf_model = recording
+
+class Task(ReachTask):
+    def __init__(self):
+        super().__init__()
+        goal = self.arena.mjcf_model.worldbody.add("site", name="goal", size=[0.02])
+        self.variator = variation.MJCFVariator()
+        self.variator.bind_attributes(self.box.geom, rgba=distributions.Uniform([0] * 4, [1] * 4))
+        spot = distributions.Uniform([-0.4, -0.4, 0], [0.4, 0.4, 0])
+        self.variator.bind_attributes(goal, pos=spot)
+        self.variator.bind_attributes(
+            self.arena.mjcf_model.find("geom", "ground"),
+            friction=distributions.Uniform([0.5, 0.005, 0.0001], [1.5, 0.01, 0.0002]),
+        )
+        self.variator.bind_attributes(
+            self.arm.mjcf_model.find("body", "upper"),
+            pos=distributions.Uniform([0, 0, 0.4], [0, 0, 0.6]),
+        )
+
+    def initialize_episode_mjcf(self, random_state):
+        self.variator.apply_variations(random_state)
+
+env = composer.Environment(Task(), random_state=3)
+for _ in range(4):
+    compiles.clear()
+    env.reset()
+    print(len(compiles), end=" ")
+"""
+
+
+def test_a_users_task_patches_from_its_second_reset_on_any_release_with_no_command_run(
+    tmp_path,
+):
+    # A RuntimeWarning (a refusal, an unreadable cache) would fail the process.
+    code = _USERS_TASK_IN_A_NEW_PROCESS.format(scene_folder=str(Path(__file__).parent))
+    runs = [
+        subprocess.run(
+            [sys.executable, "-W", "error::RuntimeWarning", "-c", code],
+            env=dict(os.environ, XDG_CACHE_HOME=str(tmp_path)),
+            capture_output=True,
+            text=True,
+            timeout=120,
+        )
+        for _ in range(2)
+    ]
+    assert [run.stderr for run in runs] == ["", ""]
+    # The first reset's changes are proven with the compile that a recompile would cost; the
+    # proof is cached, so the next process patches from its first reset.
+    assert [run.stdout.split() for run in runs] == [["1", "0", "0", "0"], ["0", "0", "0", "0"]]

@@ -51,7 +51,6 @@ class RecordingTask(ReachTask):
         super().initialize_episode(physics, random_state)
 
 
-@pytest.mark.patch_table
 @pytest.mark.parametrize("vary_contacts", [False, True])
 def test_resets_read_and_play_as_resets_that_recompile(vary_contacts):
     reused = composer.Environment(RecordingTask(vary_contacts), random_state=5)
@@ -66,7 +65,6 @@ def test_resets_read_and_play_as_resets_that_recompile(vary_contacts):
     assert_same_episodes(reused_values, compiled_values)
 
 
-@pytest.mark.patch_table
 def test_when_only_colours_change_resets_copy_the_data_instead_of_a_forward(
     monkeypatch, physics_resets
 ):
@@ -79,7 +77,6 @@ def test_when_only_colours_change_resets_copy_the_data_instead_of_a_forward(
     assert physics_resets == []
 
 
-@pytest.mark.patch_table
 def test_a_change_that_forward_reads_resets_afresh(monkeypatch, physics_resets):
     env = composer.Environment(RecordingTask(vary_contacts=True), random_state=5)
     env.reset()

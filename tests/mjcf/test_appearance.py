@@ -9,7 +9,6 @@ import pytest
 import mjcf
 from mjcf import schema
 from mjcf.appearance import APPEARANCE_FIELDS, forward_neutral_fields
-from mjcf.patching import model_patch
 
 # Every kind of object that carries a colour or a material, with sensors that read contacts,
 # frames, tendons and cameras, and (with a rangefinder) ray casting.
@@ -196,7 +195,6 @@ def test_writing_rgba_in_a_model_with_a_rangefinder_updates_its_reading():
     assert physics.bind(sensor).sensordata[0] == -1
 
 
-@pytest.mark.skipif(not model_patch.patch_supported(), reason="no proven patch table")
 @pytest.mark.parametrize("with_rangefinder", [False, True])
 def test_patching_rgba_leaves_the_physics_clean_as_a_binding_write(with_rangefinder):
     root, geom = _button_scene(with_rangefinder)

@@ -10,7 +10,7 @@ import composer
 from composer import batch, variation
 from composer.variation import distributions, rotations
 
-pytestmark = [pytest.mark.warp, pytest.mark.patch_table]
+pytestmark = pytest.mark.warp
 pytest.importorskip("warp", reason="needs MuJoCo Warp: pip install -e '.[warp]'")
 
 SEEDS = (21, 22, 23, 24)

@@ -15,7 +15,7 @@ from composer import batch, variation
 from composer.observation import observable
 from composer.variation import distributions
 
-pytestmark = [pytest.mark.warp, pytest.mark.patch_table]
+pytestmark = pytest.mark.warp
 pytest.importorskip("warp", reason="needs MuJoCo Warp: pip install -e '.[warp]'")
 
 TARGET_LOW, TARGET_HIGH = [-0.3, 0.2, 0.3], [0.3, 0.35, 0.3]

@@ -56,7 +56,6 @@ def test_unchanged_root_restores_the_compiled_values_without_compiling(compiles)
     assert compiles == [root]  # the first update's compile only
 
 
-@pytest.mark.patch_table
 def test_a_patchable_change_patches_in_place_and_is_kept_for_later_restores(compiles):
     root = _root()
     model = _updated(root)
@@ -177,7 +176,6 @@ def test_a_reset_after_a_restore_copies_the_last_resets_data(physics_resets):
     np.testing.assert_array_equal(model.physics.data.qpos, [0, 0, 0.5, 1, 0, 0, 0])
 
 
-@pytest.mark.patch_table
 @needs_copy
 def test_a_reset_after_a_colour_patch_copies_the_last_resets_data(physics_resets):
     root = _root()
@@ -188,7 +186,6 @@ def test_a_reset_after_a_colour_patch_copies_the_last_resets_data(physics_resets
     assert len(physics_resets) == 2
 
 
-@pytest.mark.patch_table
 def test_a_reset_after_a_patch_that_forward_reads_is_afresh(physics_resets):
     root = _root()
     model = _model_with_kept_reset(root, physics_resets)

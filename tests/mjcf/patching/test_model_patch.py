@@ -12,7 +12,7 @@ import numpy as np
 import pytest
 
 import mjcf
-from mjcf.patching import model_patch, patchable_attributes
+from mjcf.patching import patchable_attributes
 from mjcf.patching.compiled_model import CompiledModel, ModelUpdate
 from mjcf.patching.model_snapshot import ModelSnapshot
 
@@ -69,7 +69,6 @@ def _patch(root, physics, count) -> bool:
     return physics.apply_attribute_changes(root.attribute_changes_since(count))
 
 
-@pytest.mark.patch_table
 def test_colour_friction_frictionloss_and_solref_patch_to_a_recompile(scene):
     root, physics, count = scene
     root.find("geom", "upper").rgba = [0.2, 0.4, 0.6, 0.8]
@@ -81,7 +80,6 @@ def test_colour_friction_frictionloss_and_solref_patch_to_a_recompile(scene):
     np.testing.assert_array_equal(physics.named.model.geom_solref["lower"], [0.04, 0.8])
 
 
-@pytest.mark.patch_table
 def test_a_default_class_change_reaches_the_elements_that_inherit_it(scene):
     root, physics, count = scene
     root.default.joint.frictionloss = 0.9
@@ -93,7 +91,6 @@ def test_a_default_class_change_reaches_the_elements_that_inherit_it(scene):
     )
 
 
-@pytest.mark.patch_table
 def test_unsetting_a_value_patches_the_inherited_one(scene):
     root, physics, count = scene
     del root.find("joint", "wrist").frictionloss
@@ -124,11 +121,18 @@ def test_a_change_that_cannot_be_patched_changes_nothing(scene, change):
     assert _model_bytes(physics.model.ptr) == before
 
 
-def test_joint_damping_is_not_patched_since_springdamper_can_set_it():
+def test_joint_damping_patches_unless_springdamper_gives_the_joints_damping():
     root = mjcf.from_xml_string(_SCENE)
     physics = mjcf.Physics.from_mjcf_model(root)
     count = root.modification_count
     root.find("joint", "elbow").damping = 0.4
+    assert _patch(root, physics, count)
+    _assert_equals_a_recompile(root, physics)
+    # springdamper replaces the joint's own damping: writing it would leave the compiled one.
+    root.find("joint", "elbow").springdamper = [0.5, 1]
+    physics = mjcf.Physics.from_mjcf_model(root)
+    count = root.modification_count
+    root.find("joint", "elbow").damping = 0.8
     assert not _patch(root, physics, count)
 
 
@@ -162,7 +166,6 @@ def test_attachment_frames_are_not_patched(scene):
     assert not _patch(root, physics, count)
 
 
-@pytest.mark.patch_table
 def test_an_attached_models_values_patch_through_the_parent(scene):
     root, _, _ = scene
     child = mjcf.RootElement(model="child")
@@ -175,18 +178,6 @@ def test_an_attached_models_values_patch_through_the_parent(scene):
     _assert_equals_a_recompile(root, physics)
 
 
-def test_nothing_patches_on_a_mujoco_the_table_was_not_proven_on(scene, monkeypatch, tmp_path):
-    root, physics, count = scene
-    monkeypatch.setattr(patchable_attributes, "MUJOCO_VERSION", "0.0.0")
-    # No proof of this release cached either (see tests/mjcf/patching/test_patch_table.py).
-    monkeypatch.setenv("XDG_CACHE_HOME", str(tmp_path))
-    root.find("geom", "upper").rgba = [0.2, 0.4, 0.6, 0.8]
-    with pytest.warns(RuntimeWarning, match="python -m manipulation.patch_proof"):
-        assert not model_patch.patch_supported()
-    assert not _patch(root, physics, count)
-
-
-@pytest.mark.patch_table
 def test_set_const_pairs_bring_derived_constants_up_to_date():
     # A camera's position feeds cam_pos0 and cam_poscom0, which mj_setConst computes.
     root = mjcf.from_xml_string(
@@ -242,7 +233,6 @@ def _everything(model: mujoco.MjModel) -> dict[str, bytes]:
     return found
 
 
-@pytest.mark.patch_table
 def test_a_default_class_cylinder_radius_patches_a_body_whose_inertia_comes_from_geoms():
     root = mjcf.from_xml_string(_BLOCK)
     physics = mjcf.Physics.from_mjcf_model(root)
@@ -276,7 +266,6 @@ def test_a_geom_size_in_a_model_with_springdamper_recompiles():
     assert _model_bytes(physics.model.ptr) == before
 
 
-@pytest.mark.patch_table
 def test_patches_in_a_row_each_equal_a_recompile_after_other_values_were_loaded():
     root = mjcf.from_xml_string(_BLOCK)
     physics = mjcf.Physics.from_mjcf_model(root)
@@ -297,7 +286,6 @@ def test_patches_in_a_row_each_equal_a_recompile_after_other_values_were_loaded(
         assert snapshot.load(mjcf.Physics.from_mjcf_model(root).model.ptr)
 
 
-@pytest.mark.patch_table
 def test_a_springdamper_set_after_a_size_patch_stops_the_next_one():
     root = mjcf.from_xml_string(
         _BLOCK.replace("<freejoint/>", '<joint name="hinge" axis="0 1 0"/>')
@@ -343,7 +331,6 @@ _SITES = """
 """
 
 
-@pytest.mark.patch_table
 def test_a_moved_goal_site_patches_to_a_recompile_framing_statistics_included():
     root = mjcf.from_xml_string(_SITES)
     physics = mjcf.Physics.from_mjcf_model(root)
@@ -355,7 +342,6 @@ def test_a_moved_goal_site_patches_to_a_recompile_framing_statistics_included():
     _assert_everything_equals_a_recompile(root, physics)
 
 
-@pytest.mark.patch_table
 def test_a_moved_tendon_site_moves_the_tendons_derived_rest_length():
     root = mjcf.from_xml_string(_SITES)
     physics = mjcf.Physics.from_mjcf_model(root)
@@ -367,7 +353,6 @@ def test_a_moved_tendon_site_moves_the_tendons_derived_rest_length():
     _assert_everything_equals_a_recompile(root, physics)
 
 
-@pytest.mark.patch_table
 def test_a_site_quaternion_is_normalised_as_the_compiler_does():
     root = mjcf.from_xml_string(_SITES)
     physics = mjcf.Physics.from_mjcf_model(root)
@@ -395,7 +380,6 @@ _BODIES = """
 """
 
 
-@pytest.mark.patch_table
 def test_a_welded_bodys_pose_and_a_lights_direction_patch_to_a_recompile():
     root = mjcf.from_xml_string(_BODIES)
     physics = mjcf.Physics.from_mjcf_model(root)
@@ -419,7 +403,6 @@ def test_a_welded_bodys_pose_and_a_lights_direction_patch_to_a_recompile():
     ],
     ids=["free_body_pos", "second_orientation"],
 )
-@pytest.mark.patch_table
 def test_a_pose_only_a_compile_resolves_is_not_patched(change):
     root = mjcf.from_xml_string(_BODIES)
     physics = mjcf.Physics.from_mjcf_model(root)
@@ -428,7 +411,6 @@ def test_a_pose_only_a_compile_resolves_is_not_patched(change):
     assert not _patch(root, physics, count)
 
 
-@pytest.mark.patch_table
 def test_a_moving_body_in_a_model_with_springdamper_recompiles_and_a_welded_one_patches():
     # springdamper's stiffness and damping come from the inertia of the joint's tree.
     root = mjcf.from_xml_string(_BODIES)
@@ -447,7 +429,6 @@ def test_a_moving_body_in_a_model_with_springdamper_recompiles_and_a_welded_one_
     _assert_everything_equals_a_recompile(root, physics)
 
 
-@pytest.mark.patch_table
 def test_a_default_class_change_reaches_an_element_that_took_the_class_since():
     root = mjcf.from_xml_string(_SCENE)
     compiled = CompiledModel()

@@ -8,7 +8,6 @@ from mjcf.patching import model_statistics
 
 # The statistics are computed for the geom-size patch, in the compiler's order of the
 # MuJoCo release the patch table was proven on.
-pytestmark = pytest.mark.patch_table
 
 _SCENE = """
 <mujoco>

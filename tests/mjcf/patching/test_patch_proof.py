@@ -14,12 +14,11 @@ import pytest
 
 import mjcf
 from manipulation import patch_proof as suite_proof
-from mjcf.patching import patch_proof
+from mjcf.patching import model_comparison, patch_proof
 
 _BALL = "<mujoco><worldbody><body><freejoint/><geom size='0.1'/></body></worldbody></mujoco>"
 
 
-@pytest.mark.patch_table
 def test_colour_size_and_poses_are_proven_and_a_geoms_position_is_refused_with_its_fields():
     pairs = {("geom", "rgba"), ("geom", "size"), ("geom", "pos"), ("body", "pos"), ("site", "pos")}
     proven, refused = patch_proof._verdicts(
@@ -59,13 +58,13 @@ def test_data_arrays_that_differ_between_copies_of_one_model_do_not_refuse_a_pai
         scratch = next(forwards) // 2
         return {"dof_island": bytes([scratch]), "geom_xpos": model.geom_rgba.tobytes()}
 
-    monkeypatch.setattr(patch_proof, "_data_arrays", data_arrays)
-    assert patch_proof._scratch_arrays(model) == {"dof_island"}
+    monkeypatch.setattr(model_comparison, "data_arrays", data_arrays)
+    assert model_comparison.scratch_arrays(model) == {"dof_island"}
     recoloured = copy.copy(model)
     recoloured.geom_rgba[0] = [0, 1, 0, 1]
-    assert patch_proof._differences(recoloured, model) == ["geom_rgba", "data.geom_xpos"]
+    assert model_comparison.differences(recoloured, model) == ["geom_rgba", "data.geom_xpos"]
     next(forwards)  # now the patched and the compiled model's forwards leave different scratch
-    assert patch_proof._differences(copy.copy(model), model) == []
+    assert model_comparison.differences(copy.copy(model), model) == []
 
 
 def test_on_an_unproven_release_the_command_caches_a_proof_that_the_next_process_uses(tmp_path):
