@@ -33,6 +33,8 @@ compiler refuses the model).
 
 from __future__ import annotations
 
+import functools
+
 import mujoco
 import numpy as np
 
@@ -52,8 +54,10 @@ _Write = geom_size_patch.FieldWrite
 _GEOM_SIZE = ("geom", "size")
 # Attributes the compiler normalises to unit length: a quaternion, a light's direction.
 _UNIT_VECTORS = ("quat", "dir")
-# Below this norm the compiler refuses (or replaces) a vector instead of normalising it.
-_SMALLEST_NORM = 1e-15
+# MuJoCo's compiler leaves alone a vector whose squared norm is below this, and (on releases
+# that skip it, see `_kept_near_unit`) one whose norm is within this of 1, dividing any other
+# by its norm: `mjEPS` of its model compiler, which the bindings do not export.
+_COMPILER_EPS = 1e-14
 # The other ways of giving an orientation, which the compiler turns into a quaternion (and
 # refuses alongside one): the fields of MuJoCo's orientation spec but its type.
 _ORIENTATIONS = tuple(
@@ -234,15 +238,29 @@ def _field_target(physics, element, xml_name: str, cache: SizePatchCache) -> Fie
 
 
 def _unit_vector(value: np.ndarray) -> np.ndarray | None:
-    """`value` divided by its norm, the squares summed in the compiler's order; None for a
-    vector too short to normalise."""
+    """`value` normalised as the compiler normalises it (the squares summed in its order,
+    then divided by the norm unless the norm is within `_COMPILER_EPS` of 1 on a release
+    that keeps such a vector); None for a vector the compiler does not normalise."""
     total = 0.0
     for number in value:
         total += float(number) * float(number)
-    norm = np.sqrt(total)
-    if norm < _SMALLEST_NORM:
+    if total < _COMPILER_EPS:
         return None
+    norm = np.sqrt(total)
+    if abs(norm - 1.0) <= _COMPILER_EPS and _kept_near_unit():
+        return value
     return value / norm
+
+
+@functools.cache
+def _kept_near_unit() -> bool:
+    """Whether the installed MuJoCo's compiler keeps a quaternion whose norm is within
+    `_COMPILER_EPS` of 1 as given (recent releases) instead of dividing it by its norm:
+    asked of the compiler once, on a model of one body."""
+    quat = np.full(4, 0.5) * (1 + _COMPILER_EPS / 2)
+    text = " ".join(repr(float(number)) for number in quat)
+    xml = f'<mujoco><worldbody><body quat="{text}"><geom size="1"/></body></worldbody></mujoco>'
+    return bool(np.array_equal(mujoco.MjModel.from_xml_string(xml).body_quat[1], quat))
 
 
 def _resolves(element, xml_name: str) -> bool:

@@ -183,3 +183,23 @@ def test_a_proof_made_in_one_process_patches_in_the_next_without_a_compile(unpro
     ]
     assert [run.stderr for run in runs] == ["", ""]
     assert [run.stdout.split() for run in runs] == [["True", "1"], ["True", "0"]]
+
+
+def test_joint_damping_is_proven_apart_in_a_model_whose_joints_take_springdamper():
+    # The corpus refuses the pair (springdamper models differ in dof_damping); at first use
+    # a model without springdamper proves it, and one with it is proven apart and refused.
+    root = mjcf.from_xml_string(_ARM.format(angle="radian"))
+    physics = mjcf.Physics.from_mjcf_model(root)
+    count = root.modification_count
+    root.find("joint", "shoulder").damping = 0.4
+    assert physics.apply_attribute_changes(root.attribute_changes_since(count))
+    assert (
+        model_comparison.differences(physics.model.ptr, physics_module.compile_mjcf_model(root))
+        == []
+    )
+    root.find("joint", "shoulder").springdamper = [0.5, 1]
+    physics = mjcf.Physics.from_mjcf_model(root)
+    count = root.modification_count
+    root.find("joint", "shoulder").damping = 0.8
+    with pytest.warns(RuntimeWarning, match="takes springdamper.*dof_damping"):
+        assert not physics.apply_attribute_changes(root.attribute_changes_since(count))
