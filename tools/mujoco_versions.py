@@ -8,7 +8,8 @@ Builds one venv per release under `.cache/mujoco_versions/<version>` (kept betwe
 `mujoco` there, proves there which MJCF attributes a reset may patch in place
 (`python -m manipulation.patch_proof`: on the release of the checked-in table it checks the table,
 on any other it caches its proof, in `xdg_cache/` beside the venvs), and runs `pytest` in
-each with `MUJOCO_GL=egl` and that proof; each run's full output goes to
+each with `MUJOCO_GL=egl` (the tests start from an empty cache of their own, so each patch is
+proven at first use there); each run's full output goes to
 `logs/<version>.txt` beside the venvs (`--install-only` builds the venvs and exits). The
 releases are the newest patch of every minor release that pip offers from the project's
 floor (`mujoco_physics.version.MINIMUM_VERSION`) up, the floor version itself, and the

@@ -13,13 +13,18 @@ stands on. From an MJCF change to the model a reset starts from:
    every MjModel array and every MjData array after `mj_forward` to be bit-identical. Its
    verdicts for one MuJoCo release are the generated table `patchable_attributes`
    (`python -m manipulation.patch_proof` gathers the task suite's models, runs the proof,
-   and, on the table's release, fails when the table is stale); `patch_table` says which
-   proof applies to the installed MuJoCo (that table, or a proof cached for this release, or
-   none: then nothing patches, with a warning).
+   and, on the table's release, fails when the table is stale). On any release, a change no
+   proof covers is proven at its first use on the model at hand (`first_use_proof`: patch a
+   copy, recompile, compare with `model_comparison`), per `patch_context.PatchContext` (the
+   kind of change, where it is set, and what else changes how it compiles); `patch_table`
+   says which proofs apply to the installed MuJoCo (the table on its release, the corpus
+   command's cache, the proofs made at first use) and keeps them in a per-release cache
+   that concurrent processes share.
 3. `CompiledModel.update(root)`, once per reset, takes the cheapest exact way: RESTORED
    (nothing changed), PATCHED (only proven attributes changed: `model_patch`, through
-   `mjcf.Physics.apply_attribute_changes`), LOADED (recompiled, same structure: the new
-   parameters written into the current model) or NEW_PHYSICS (recompiled).
+   `mjcf.Physics.apply_attribute_changes` and `first_use_proof`), LOADED (recompiled, same
+   structure: the new parameters written into the current model) or NEW_PHYSICS
+   (recompiled).
 4. The patch: `model_patch` writes each changed attribute's compiled value into its
    field, runs `mj_setConst` where the table says so, then recomputes what the compiler
    derives and `mj_setConst` does not (the model statistics: `model_statistics`). A
@@ -41,8 +46,11 @@ Which module answers which question:
 - `patch_proof`: how is an attribute proven patchable?
 - `patchable_attributes`: which (tag, attribute) pairs are proven, on which MuJoCo, and
   why each refused one recompiles?
-- `patch_table`: which proof applies to the installed MuJoCo, and where is a proof for
-  another release cached?
+- `patch_table`: which proofs apply to the installed MuJoCo, and where and how are they
+  cached?
+- `first_use_proof`: what does a reset do with a change no proof covers yet?
+- `patch_context`: what does a proof on one model promise for a change on another?
+- `model_comparison`: when are a patched model and a recompile the same, bit for bit?
 - `model_patch`: which changes can be written in place, and how?
 - `geom_size_patch`: which fields does a primitive geom's size change besides `geom_size`?
 - `geom_body_copies`: how does MuJoCo's compiler give those fields for a few bodies?

@@ -21,9 +21,10 @@ Prints one line per pair: how it patches, or why it recompiles (the fields that 
 On the MuJoCo release the checked-in table `mjcf/patching/patchable_attributes.py` was
 proven on, it exits 1 when the proof disagrees with the table, unless `--write`, which
 rewrites the table (for the project's maintainers, in a source checkout). On any other
-release it saves the proof in the user's cache directory
-(`mjcf.patching.patch_table.cache_path`), where every later process finds it: patching is
-then on there, for exactly the pairs proven.
+release it saves its pair verdicts in the user's cache directory
+(`mjcf.patching.patch_table.cache_path`), beside the proofs made at first use, where every
+later process finds them. Nothing needs it there: a change no proof covers is proven at its
+first use (`mjcf.patching.first_use_proof`); it only warms a release before its first reset.
 """
 
 from __future__ import annotations

@@ -415,7 +415,9 @@ def _read(path: Path, installed: str) -> ProvenTable:
     return table
 
 
+@functools.cache
 def _project_version() -> str:
+    """This project's installed version (what a cache file must have been written by)."""
     try:
         return importlib.metadata.version(_DISTRIBUTION)
     except importlib.metadata.PackageNotFoundError:
