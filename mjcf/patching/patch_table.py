@@ -392,8 +392,13 @@ def _read(path: Path, installed: str) -> ProvenTable:
     """The proofs in the cache file at `path`; raises ValueError (or OSError, TypeError,
     KeyError for a malformed file) when they do not apply to `installed`."""
     record = json.loads(path.read_text(encoding="utf-8"))
-    if not isinstance(record, dict) or record.get("format") != _FORMAT:
+    if not isinstance(record, dict) or "format" not in record:
         raise ValueError(f"expected proofs of format {_FORMAT}, got {str(record)[:80]!r}")
+    if record["format"] != _FORMAT:
+        raise ValueError(
+            f"it holds proofs of format {record['format']!r} (another version of "
+            f"{_DISTRIBUTION} wrote it), this one reads format {_FORMAT}"
+        )
     if record["mujoco"] != installed:
         raise ValueError(
             f"it was proven on mujoco {record['mujoco']}, the installed one is {installed}"

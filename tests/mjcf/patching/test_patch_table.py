@@ -157,6 +157,15 @@ def test_a_cache_file_proven_by_another_version_of_the_project_is_ignored(unprov
     _assert_ignored_then_replaced(path, r"proven by mujoco-composer 0\.0\.1-older")
 
 
+def test_a_cache_file_of_an_older_format_is_ignored_naming_its_format(unproven_release):
+    # What a user upgrading from a version that cached pair verdicts only (format 1) meets.
+    path = _cache_file(unproven_release)
+    path.parent.mkdir(parents=True)
+    record = {"format": 1, "mujoco": mujoco.__version__, "proven": [["geom", "rgba", False]]}
+    path.write_text(json.dumps(record), encoding="utf-8")
+    _assert_ignored_then_replaced(path, r"proofs of format 1 \(another version of mujoco-composer")
+
+
 def test_a_proof_made_in_another_process_is_read_before_proving_again(unproven_release):
     assert patch_table.current().contexts == {}
     subprocess.run(
