@@ -28,6 +28,7 @@ _WARP_WARM_UP = "tests/composer/batch/test_batch_physics.py"
 def pytest_collection_modifyitems(config, items):
     if config.pluginmanager.hasplugin("xdist"):
         _order_warp_tests_for_two_workers(items)
+    _skip_patches_proven_from_3_17_below_it(items)
 
 
 def _order_warp_tests_for_two_workers(items):
@@ -55,6 +56,30 @@ def _order_warp_tests_for_two_workers(items):
             item.add_marker(pytest.mark.xdist_group(group[0].nodeid.split("::")[0]))
     rest = [item for item in items if "warp" not in item.keywords]
     items[:] = warm_up + rest + [item for group in last for item in group]
+
+
+# The release from which the changes that `patches_from_3_17` tests write in place prove
+# equal to a recompile.
+_PATCHES_FROM = (3, 17)
+
+
+def _skip_patches_proven_from_3_17_below_it(items):
+    # On older releases (the floor, 3.3.0) the compiler's statistics (stat.center) and the
+    # arrays mj_forward leaves unwritten differ from what the patch computes and what these
+    # tests compare, so the proofs at first use refuse those changes (the resets recompile,
+    # exactly) and what these tests assert patches does not.
+    import mujoco
+
+    version = tuple(int(part) for part in mujoco.__version__.split(".")[:2])
+    if version >= _PATCHES_FROM:
+        return
+    skip = pytest.mark.skip(
+        reason=f"asserts patches proven from mujoco 3.17 on; on {mujoco.__version__} the "
+        "proofs refuse them (statistics and unwritten forward arrays differ) and resets recompile"
+    )
+    for item in items:
+        if "patches_from_3_17" in item.keywords:
+            item.add_marker(skip)
 
 
 def pytest_addoption(parser):

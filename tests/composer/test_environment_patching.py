@@ -6,6 +6,7 @@ import sys
 from pathlib import Path
 
 import numpy as np
+import pytest
 from composer_scene import ReachTask, assert_same_episodes, play_episodes
 
 import composer
@@ -54,6 +55,7 @@ class MovingTask(ReachTask):
         self.arm.tip.quat = [1, random_state.uniform(-1, 1), 0, 0]
 
 
+@pytest.mark.patches_from_3_17
 def test_moved_sites_and_bodies_patch_without_compiling_and_bit_identically(compiles):
     patched_env = composer.Environment(MovingTask(), random_state=3)
     compiled_env = composer.Environment(MovingTask(), random_state=3, patch_compiled_model=False)
@@ -163,6 +165,7 @@ class BrickTask(ReachTask):
         self.brick.set_pose(physics, position=[0.3, 0.3, 0.0105], quaternion=[1, 0, 0, 0])
 
 
+@pytest.mark.patches_from_3_17
 def test_a_default_class_cylinder_radius_drawn_every_episode_patches_bit_identically(
     monkeypatch, compiles
 ):
@@ -234,6 +237,7 @@ for _ in range(4):
 """
 
 
+@pytest.mark.patches_from_3_17
 def test_a_users_task_patches_from_its_second_reset_on_any_release_with_no_command_run(
     tmp_path,
 ):

@@ -65,6 +65,7 @@ def test_resets_read_and_play_as_resets_that_recompile(vary_contacts):
     assert_same_episodes(reused_values, compiled_values)
 
 
+@pytest.mark.patches_from_3_17
 def test_when_only_colours_change_resets_copy_the_data_instead_of_a_forward(
     monkeypatch, physics_resets
 ):

@@ -218,6 +218,7 @@ def _everything(model: mujoco.MjModel) -> dict[str, bytes]:
     return found
 
 
+@pytest.mark.patches_from_3_17
 def test_a_default_class_cylinder_radius_patches_a_body_whose_inertia_comes_from_geoms():
     root = mjcf.from_xml_string(_BLOCK)
     physics = mjcf.Physics.from_mjcf_model(root)
@@ -251,6 +252,7 @@ def test_a_geom_size_in_a_model_with_springdamper_recompiles():
     assert _model_bytes(physics.model.ptr) == before
 
 
+@pytest.mark.patches_from_3_17
 def test_patches_in_a_row_each_equal_a_recompile_after_other_values_were_loaded():
     root = mjcf.from_xml_string(_BLOCK)
     physics = mjcf.Physics.from_mjcf_model(root)
@@ -316,6 +318,7 @@ _SITES = """
 """
 
 
+@pytest.mark.patches_from_3_17
 def test_a_moved_goal_site_patches_to_a_recompile_framing_statistics_included():
     root = mjcf.from_xml_string(_SITES)
     physics = mjcf.Physics.from_mjcf_model(root)
@@ -327,6 +330,7 @@ def test_a_moved_goal_site_patches_to_a_recompile_framing_statistics_included():
     _assert_everything_equals_a_recompile(root, physics)
 
 
+@pytest.mark.patches_from_3_17
 def test_a_moved_tendon_site_moves_the_tendons_derived_rest_length():
     root = mjcf.from_xml_string(_SITES)
     physics = mjcf.Physics.from_mjcf_model(root)
@@ -338,6 +342,7 @@ def test_a_moved_tendon_site_moves_the_tendons_derived_rest_length():
     _assert_everything_equals_a_recompile(root, physics)
 
 
+@pytest.mark.patches_from_3_17
 def test_a_site_quaternion_is_normalised_as_the_compiler_does():
     root = mjcf.from_xml_string(_SITES)
     physics = mjcf.Physics.from_mjcf_model(root)
@@ -365,6 +370,7 @@ _BODIES = """
 """
 
 
+@pytest.mark.patches_from_3_17
 def test_a_welded_bodys_pose_and_a_lights_direction_patch_to_a_recompile():
     root = mjcf.from_xml_string(_BODIES)
     physics = mjcf.Physics.from_mjcf_model(root)
@@ -378,6 +384,7 @@ def test_a_welded_bodys_pose_and_a_lights_direction_patch_to_a_recompile():
     _assert_everything_equals_a_recompile(root, physics)
 
 
+@pytest.mark.patches_from_3_17
 def test_unit_quaternions_and_directions_drawn_at_random_patch_to_a_recompiles_bits():
     # A drawn unit vector's norm is 1 give or take an ulp; the compiler keeps such a
     # vector as given (dividing it by its norm moves one ulp in about a quarter of draws).
@@ -412,6 +419,7 @@ def test_a_pose_only_a_compile_resolves_is_not_patched(change):
     assert not _patch(root, physics, count)
 
 
+@pytest.mark.patches_from_3_17
 def test_a_moving_body_in_a_model_with_springdamper_recompiles_and_a_welded_one_patches():
     # springdamper's stiffness and damping come from the inertia of the joint's tree.
     root = mjcf.from_xml_string(_BODIES)

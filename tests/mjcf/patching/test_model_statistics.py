@@ -31,6 +31,7 @@ _SCENE = """
 """
 
 
+@pytest.mark.patches_from_3_17
 @pytest.mark.parametrize("xml", [_SCENE, _SCENE.replace('size="2 1 0.1"', 'size="0 0 0.1"')])
 def test_statistics_equal_the_compilers_bit_for_bit(xml):
     model = mujoco.MjModel.from_xml_string(xml)

@@ -19,6 +19,7 @@ from mjcf.patching import model_comparison, patch_proof
 _BALL = "<mujoco><worldbody><body><freejoint/><geom size='0.1'/></body></worldbody></mujoco>"
 
 
+@pytest.mark.patches_from_3_17
 def test_colour_size_and_poses_are_proven_and_a_geoms_position_is_refused_with_its_fields():
     pairs = {("geom", "rgba"), ("geom", "size"), ("geom", "pos"), ("body", "pos"), ("site", "pos")}
     proven, refused = patch_proof._verdicts(
