@@ -116,8 +116,9 @@ def variety(element: Element, attribute: str) -> tuple[str, ...]:
     )
 
 
-# The last answer of `_model_flags`: (model, its modification count, answer). A reset's
-# changes share one model and one count.
+# The last answer of `_model_flags`: (model, the modification count it holds at, answer).
+# A reset's changes share one model and one count, and the next reset's changes (colours,
+# poses) rarely touch what it answers.
 _FLAGS: list = [None, -1, (False, "")]
 
 
@@ -126,8 +127,14 @@ def _model_flags(root) -> tuple[bool, str]:
     template) sets `springdamper`; and the compiler options the model sets ('compiler:
     angle=radian, ...'), which change how values compile (units, limits from ranges,
     bounds on masses)."""
-    if _FLAGS[0] is root and _FLAGS[1] == root.modification_count:
+    count = root.modification_count
+    if _FLAGS[0] is root and _FLAGS[1] == count:
         return _FLAGS[2]
+    if _FLAGS[0] is root:
+        since = root.attribute_changes_since(_FLAGS[1])
+        if since is not None and not any(_moves_flags(change) for change in since):
+            _FLAGS[1] = count
+            return _FLAGS[2]
     found = False
     models = [root]
     for model in models:
@@ -141,8 +148,13 @@ def _model_flags(root) -> tuple[bool, str]:
         if path == ("compiler",)
     ]
     compiler = "compiler: " + (", ".join(options) if options else "defaults")
-    _FLAGS[:] = [root, root.modification_count, (found, compiler)]
+    _FLAGS[:] = [root, count, (found, compiler)]
     return found, compiler
+
+
+def _moves_flags(change: AttributeChange) -> bool:
+    """Whether `change` may change what `_model_flags` answers."""
+    return change.attribute == "springdamper" or change.element._spec.name == "compiler"
 
 
 def _shown(value) -> str:
