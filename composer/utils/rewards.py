@@ -1,9 +1,10 @@
 """Shaped rewards: `tolerance` maps a distance from a target interval to a value in [0, 1].
 
-`tolerance` has three paths, chosen by the type of `x`: plain `math` for one Python or
+`tolerance` has three paths, chosen by the type of `x`: plain Python for one Python or
 NumPy number, NumPy for NumPy arrays (and lists), and the array's own namespace for any
 other array-API array (torch, JAX, CuPy, array_api_strict), found with the optional
-`array_api_compat`, imported only when such an array is given.
+`array_api_compat`, imported only when such an array is given. The first two compute the
+same float64 operations, so a number's value equals its entry of an array's, bit for bit.
 """
 
 from __future__ import annotations
@@ -20,110 +21,15 @@ _DEFAULT_VALUE_AT_MARGIN = 0.1
 _BOUNDED_SUPPORT = frozenset({"cosine", "linear", "quadratic"})
 
 
-def _gaussian(x, value_at_1):
-    scale = np.sqrt(-2.0 * np.log(value_at_1))
-    return np.exp(-0.5 * (x * scale) ** 2)
+# One set of formulas for every path: the constants of a sigmoid are computed with `math`
+# from `value_at_1`, the values with the namespace's own functions (NumPy's for Python and
+# NumPy numbers too, whose `exp`, `cosh` and `tanh` differ from `math`'s in the last bit for
+# some inputs), so that a reward computed for one world on a number equals, bit for bit, the
+# same reward computed for many worlds on a NumPy array (the CPU batch). The constants are
+# Python floats, so the result keeps the dtype and device of `x`. `x` is the distance in
+# units of the margin: non-negative, or NaN.
 
 
-def _hyperbolic(x, value_at_1):
-    scale = np.arccosh(1.0 / value_at_1)
-    return 1.0 / np.cosh(x * scale)
-
-
-def _long_tail(x, value_at_1):
-    scale = np.sqrt(1.0 / value_at_1 - 1.0)
-    return 1.0 / ((x * scale) ** 2 + 1.0)
-
-
-def _reciprocal(x, value_at_1):
-    scale = 1.0 / value_at_1 - 1.0
-    return 1.0 / (np.abs(x) * scale + 1.0)
-
-
-def _cosine(x, value_at_1):
-    scaled = x * (np.arccos(2.0 * value_at_1 - 1.0) / np.pi)
-    # Evaluate the cosine only inside its support; outside it the value is 0.
-    inside = np.abs(scaled) < 1.0
-    return np.where(inside, (1.0 + np.cos(np.pi * np.where(inside, scaled, 0.0))) / 2.0, 0.0)
-
-
-def _linear(x, value_at_1):
-    scaled = x * (1.0 - value_at_1)
-    return np.where(np.abs(scaled) < 1.0, 1.0 - scaled, 0.0)
-
-
-def _quadratic(x, value_at_1):
-    scaled = x * np.sqrt(1.0 - value_at_1)
-    return np.where(np.abs(scaled) < 1.0, 1.0 - scaled**2, 0.0)
-
-
-def _tanh_squared(x, value_at_1):
-    scale = np.arctanh(np.sqrt(1.0 - value_at_1))
-    return 1.0 - np.tanh(x * scale) ** 2
-
-
-_SIGMOIDS = {
-    "gaussian": _gaussian,
-    "hyperbolic": _hyperbolic,
-    "long_tail": _long_tail,
-    "reciprocal": _reciprocal,
-    "cosine": _cosine,
-    "linear": _linear,
-    "quadratic": _quadratic,
-    "tanh_squared": _tanh_squared,
-}
-
-SIGMOIDS = tuple(_SIGMOIDS)
-_SCALAR_TYPES = (int, float, np.integer, np.floating)
-
-
-def _scalar_gaussian(x, value_at_1):
-    scaled = x * math.sqrt(-2.0 * math.log(value_at_1))
-    return math.exp(-0.5 * (scaled * scaled))
-
-
-def _scalar_long_tail(x, value_at_1):
-    scaled = x * math.sqrt(1.0 / value_at_1 - 1.0)
-    return 1.0 / (scaled * scaled + 1.0)
-
-
-def _scalar_reciprocal(x, value_at_1):
-    return 1.0 / (abs(x) * (1.0 / value_at_1 - 1.0) + 1.0)
-
-
-def _scalar_cosine(x, value_at_1):
-    scaled = x * (math.acos(2.0 * value_at_1 - 1.0) / math.pi)
-    return (1.0 + math.cos(math.pi * scaled)) / 2.0 if abs(scaled) < 1.0 else 0.0
-
-
-def _scalar_linear(x, value_at_1):
-    scaled = x * (1.0 - value_at_1)
-    return 1.0 - scaled if abs(scaled) < 1.0 else 0.0
-
-
-def _scalar_quadratic(x, value_at_1):
-    scaled = x * math.sqrt(1.0 - value_at_1)
-    return 1.0 - scaled * scaled if abs(scaled) < 1.0 else 0.0
-
-
-# The same sigmoids on one Python float, with the `math` module: a reward computed from one
-# distance per step would spend most of its time in NumPy's per-call overhead. The
-# hyperbolic and tanh-squared ones keep NumPy's functions, whose tails libm's do not match.
-_SCALAR_SIGMOIDS = {
-    "gaussian": _scalar_gaussian,
-    "hyperbolic": _hyperbolic,
-    "long_tail": _scalar_long_tail,
-    "reciprocal": _scalar_reciprocal,
-    "cosine": _scalar_cosine,
-    "linear": _scalar_linear,
-    "quadratic": _scalar_quadratic,
-    "tanh_squared": _tanh_squared,
-}
-
-
-# The same sigmoids in any array-API namespace `xp`. The constants are Python floats, so
-# the result keeps the dtype and device of `x`. `x` is the distance in units of the
-# margin: non-negative, or NaN.
 def _xp_gaussian(xp, x, value_at_1):
     scaled = x * math.sqrt(-2.0 * math.log(value_at_1))
     return xp.exp(-0.5 * (scaled * scaled))
@@ -177,10 +83,18 @@ _XP_SIGMOIDS = {
     "tanh_squared": _xp_tanh_squared,
 }
 
+SIGMOIDS = tuple(_XP_SIGMOIDS)
+_SCALAR_TYPES = (int, float, np.integer, np.floating)
+
 # Inputs that take the scalar or NumPy path without looking for another namespace.
 _HOST_INPUTS = (*_SCALAR_TYPES, np.ndarray, np.generic, list, tuple)
 
 _ARRAY_API_INSTALL_HINT = "pip install array-api-compat (or pip install 'mujoco-composer[warp]')"
+
+
+def _scalar_sigmoid(x: float, value_at_1: float, sigmoid: str) -> float:
+    """A sigmoid at one distance: the array formulas on a NumPy number."""
+    return float(_XP_SIGMOIDS[sigmoid](np, np.float64(x), value_at_1))
 
 
 def _check_value_at_margin(value_at_1: float, sigmoid: str) -> None:
@@ -203,7 +117,7 @@ def _sigmoids(x, value_at_1: float, sigmoid: str):
     Every sigmoid equals 1 at x=0, decreases with |x|, and equals `value_at_1` at |x|=1.
     """
     _check_value_at_margin(value_at_1, sigmoid)
-    return _SIGMOIDS[sigmoid](x, value_at_1)
+    return _XP_SIGMOIDS[sigmoid](np, x, value_at_1)
 
 
 def _array_namespace(x):
@@ -316,7 +230,7 @@ def tolerance(
         raise ValueError(f"tolerance: bounds must satisfy lower <= upper, got {bounds}")
     if margin < 0:
         raise ValueError(f"tolerance: margin must be non-negative, got {margin}")
-    if sigmoid not in _SIGMOIDS:
+    if sigmoid not in _XP_SIGMOIDS:
         raise ValueError(f"tolerance: unknown sigmoid {sigmoid!r}; expected one of {SIGMOIDS}")
     if xp is not None:
         return _xp_tolerance(xp, x, lower, upper, margin, sigmoid, value_at_margin)
@@ -328,7 +242,7 @@ def tolerance(
             return 0.0
         _check_value_at_margin(value_at_margin, sigmoid)
         distance = (lower - x if x < lower else x - upper) / margin
-        return float(_SCALAR_SIGMOIDS[sigmoid](float(distance), float(value_at_margin)))
+        return _scalar_sigmoid(float(distance), float(value_at_margin), sigmoid)
     x_array = np.asarray(x)
     in_bounds = (lower <= x_array) & (x_array <= upper)
     if margin == 0:
