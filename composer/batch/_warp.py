@@ -7,8 +7,7 @@ Warp's native start-up prints "Warp CUDA warning: Could not find or load the NVI
 driver..." to the process's stderr on a machine without one. Warp has no setting that skips
 looking for the driver, so unless a CUDA device was asked for, `load` runs Warp's start-up
 with stderr caught and passes on everything but that line: a user who asked for the CPU
-device (or for none: `default_device` then says which it took) is not told about a GPU
-they did not ask for.
+device (or for none) is not told about a GPU they did not ask for.
 """
 
 import os
@@ -109,23 +108,3 @@ def is_available() -> bool:
     import importlib.util
 
     return all(importlib.util.find_spec(name) is not None for name in ("mujoco_warp", "warp"))
-
-
-def default_device() -> str:
-    """'cuda:0' when Warp sees a CUDA device, else 'cpu', with a one-line warning that says so.
-
-    Returns:
-      A Warp device name.
-    """
-    import warnings
-
-    warp = load().warp
-    if warp.get_cuda_device_count() > 0:
-        return "cuda:0"
-    warnings.warn(
-        "composer.batch: Warp sees no CUDA device; the batch runs on Warp's CPU device "
-        "(pass device='cpu' to say so and silence this)",
-        RuntimeWarning,
-        stacklevel=3,
-    )
-    return "cpu"

@@ -21,15 +21,23 @@ _FLOAT32_MAX = float(np.finfo(np.float32).max)
 
 
 def check_action(
-    action, expected: tuple[int, ...], arrays: ArrayBridge, *, check_values: bool
+    action,
+    expected: tuple[int, ...],
+    arrays: ArrayBridge,
+    *,
+    check_values: bool,
+    dtype=np.float32,
 ) -> Any:
-    """Returns `action` checked, as a float32 array of the batch's namespace on its device.
+    """Returns `action` checked, as a `dtype` array of the batch's namespace on its device.
 
     Args:
       action: a NumPy array (or anything NumPy reads), or a Warp, torch or JAX array.
       expected: the shape, (num_envs, *action shape).
       arrays: the batch's `ArrayBridge`.
       check_values: whether to check device arrays for NaN and infinity.
+      dtype: the batch's float dtype: float32 (MuJoCo Warp: values beyond its range are
+        refused) or float64 (the CPU batch, on NumPy memory: device arrays are read on the
+        host).
 
     Raises:
       ValueError: naming `action`, for a value that is not a float array of shape
@@ -37,8 +45,10 @@ def check_action(
         beyond float32's range entries (the message lists the worlds that have them).
     """
     library = array_library(action)
-    if not library:
-        return arrays.asarray(_check_host_action(action, expected), np.float32)
+    dtype = np.dtype(dtype)
+    if not library or dtype == np.float64:
+        host = action if not library else arrays.to_host(action)
+        return arrays.asarray(_check_host_action(host, expected, dtype), dtype)
     wp = _warp.load().warp
     try:
         if library == "torch":
@@ -76,7 +86,7 @@ def check_action(
     return xp.astype(arrays.view(array, expected), xp.float32)
 
 
-def _check_host_action(action, expected: tuple[int, ...]) -> np.ndarray:
+def _check_host_action(action, expected: tuple[int, ...], dtype: np.dtype) -> np.ndarray:
     try:
         array = np.asarray(action, dtype=np.float64)
     except (TypeError, ValueError) as error:
@@ -87,7 +97,8 @@ def _check_host_action(action, expected: tuple[int, ...]) -> np.ndarray:
         raise ValueError(
             f"action: expected shape {expected} (num_envs, *action_spec().shape), got {array.shape}"
         )
-    if not (np.abs(array) <= _FLOAT32_MAX).all():
+    limit = float(np.finfo(dtype).max)
+    if not (np.abs(array) <= limit).all():
         _raise_bad_values(array)
     return array
 

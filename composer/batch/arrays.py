@@ -97,6 +97,20 @@ class ArrayBridge:
         self.device = device
         self._torch_stream = None
         self.array_type = check_array_type(array_type)
+        if warp is None:  # `host`: NumPy memory, no Warp
+            if array_type == "warp" or namespace not in (None, "numpy"):
+                raise ValueError(
+                    f"array_type={array_type!r}, namespace={namespace!r}: the CPU batch "
+                    "(mujoco.batch) computes in NumPy and hands out 'numpy', 'torch' or "
+                    "'jax'; Warp arrays and torch task code need a Warp device "
+                    "(device='warp-cpu' or 'cuda:0')"
+                )
+            self.library = "numpy"
+            self.xp = array_api_compat.array_namespace(np.zeros(0))
+            self.xp_device = "cpu"
+            if array_type == "jax":
+                _import("jax", "array_type='jax'")
+            return
         if namespace not in (None, "numpy", "torch") or (namespace == "numpy" and device.is_cuda):
             raise ValueError(
                 f"namespace: expected None, 'torch' or (on Warp's CPU device) 'numpy', got "
@@ -122,6 +136,16 @@ class ArrayBridge:
         if array_type == "jax":
             _import("jax", "array_type='jax'")
 
+    @classmethod
+    def host(cls, array_type: str, namespace: str | None = None) -> "ArrayBridge":
+        """The bridge of a batch whose memory is NumPy's (`mujoco.batch`): task code runs in
+        NumPy, and `hand_out` gives NumPy arrays, or torch or JAX ones made from them.
+
+        Raises:
+          ValueError: for array_type "warp" or namespace "torch", which need Warp.
+        """
+        return cls(None, "cpu", array_type, namespace)
+
     def use_stream(self) -> None:
         """Makes Warp's stream of the device the calling thread's current torch stream (on
         CUDA; nothing elsewhere). torch keeps one current stream per thread."""
@@ -133,12 +157,18 @@ class ArrayBridge:
 
     def view(self, array, shape: tuple[int, ...]) -> Any:
         """The contiguous Warp `array` as an `xp` array of `shape`, sharing its memory."""
+        if self._wp is None:
+            return np.reshape(array, shape)
         if self.library == "torch":
             return self._wp.to_torch(array).reshape(shape)
         return array.numpy().reshape(shape)
 
     def empty(self, shape: tuple[int, ...], dtype) -> tuple[Any, Any]:
-        """A new Warp array on the device and its `xp` view: `(warp_array, view)`."""
+        """A new Warp array on the device and its `xp` view: `(warp_array, view)` (on the
+        host: one NumPy array, twice)."""
+        if self._wp is None:
+            array = np.zeros(shape, dtype)
+            return array, array
         array = self._wp.zeros(
             shape, dtype=self._wp.dtype_from_numpy(np.dtype(dtype)), device=self.device
         )
@@ -183,6 +213,8 @@ class ArrayBridge:
             if self.library == "torch":
                 return values
             return _import("torch", "array_type='torch'").from_numpy(np.asarray(values))
+        if self._wp is None:  # "jax", from host memory
+            return _import("jax", "array_type='jax'").numpy.asarray(values)
         array = self.to_warp(values)
         return self._wp.to_jax(array) if kind == "jax" else array
 

@@ -1,13 +1,15 @@
 """Views of a batch's MjModel/MjData fields: by field name, by MJCF element, by object name.
 
-Each view reads MuJoCo Warp's own array through a view made once in the batch's namespace
-(see `composer.batch.arrays`), with a leading `num_envs` axis and the trailing shape of the
-C field of the same name (`data.xmat` is (num_envs, nbody, 9)), in float32. Writes land in
-the device memory of the worlds they select; a model field shared by every world refuses
-them (see `composer.batch.physics` for where values live).
+Each view reads the batch physics' own memory (MuJoCo Warp's arrays, or `mujoco.batch`'s
+rows) through a view made once in the batch's namespace (see `composer.batch.arrays`), with a
+leading `num_envs` axis and the trailing shape of the C field of the same name (`data.xmat`
+is (num_envs, nbody, 9)), in the physics' float dtype (float32 on MuJoCo Warp, float64 on
+`mujoco.batch`). Writes land in the memory of the worlds they select; a model field shared
+by every world refuses them (see `composer.batch.physics` and `composer.batch.mujoco_batch`
+for where values live).
 """
 
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, Any, NamedTuple
 
 import numpy as np
 
@@ -17,35 +19,49 @@ from mujoco_physics import field_layout
 if TYPE_CHECKING:
     from composer.batch.physics import BatchPhysics
 
-__all__ = ["BatchBinding", "FieldView", "NamedViews", "StructViews"]
+__all__ = ["BatchBinding", "FieldStorage", "FieldView", "NamedViews", "StructViews"]
+
+
+class FieldStorage(NamedTuple):
+    """Where a `FieldView` reads a field, as its batch physics reports it.
+
+    Attributes:
+      view: the field's memory in the batch's namespace, (num_envs, *C shape) for a
+        per-world field, (1, *C shape) for a model field shared by every world.
+      per_world: whether each world has its own row.
+      gatherable: whether `composer.batch.gather` may read it (a field of the batch's float
+        dtype).
+      device_array: the Warp array behind `view` (None off MuJoCo Warp).
+    """
+
+    view: Any
+    per_world: bool
+    gatherable: bool
+    device_array: Any = None
 
 
 class FieldView:
     """One MjModel/MjData field of every world, as a view in the batch's namespace.
 
     Attributes:
-      view: the field's device memory, shape (num_envs, *C shape) for a per-world field,
+      view: the field's memory, shape (num_envs, *C shape) for a per-world field,
         (1, *C shape) for a model field shared by every world.
       per_world: whether each world has its own row.
+      gatherable: whether it is a field of the batch's float dtype.
+      device_array: the MuJoCo Warp array behind it (None on `mujoco.batch`).
     """
 
-    def __init__(self, physics: "BatchPhysics", struct: str, name: str):
+    def __init__(self, physics, struct: str, name: str):
         self.struct = struct
         self.name = name
         self._physics = physics
         host = physics.mj_model if struct == field_layout.MODEL else physics.host.data.ptr
         self.c_shape = np.shape(getattr(host, name))
-        self.per_world = struct == field_layout.DATA or name in physics.batched_model_fields
-        owner = physics.warp_model if struct == field_layout.MODEL else physics.warp_data
-        try:
-            self.device_array = getattr(owner, name)
-        except AttributeError:
-            raise AttributeError(
-                f"MuJoCo Warp has no {struct} field {name!r} (MuJoCo has it; Warp does not "
-                "simulate it)"
-            ) from None
-        rows = physics.num_envs if self.per_world else 1
-        self.view = physics.arrays.view(self.device_array, (rows, *self.c_shape))
+        storage = physics.field_storage(struct, name)
+        self.view = storage.view
+        self.per_world = storage.per_world
+        self.gatherable = storage.gatherable
+        self.device_array = storage.device_array
 
     def read(self) -> Any:
         """The field of all worlds, (num_envs, *C shape); a shared field is broadcast."""

@@ -12,9 +12,10 @@ from dm_env import specs
 import composer
 import mjcf
 from composer import episode_end
-from composer.batch import _warp, actions, arrays, refusals, variations
+from composer.batch import _warp, actions, arrays, devices, refusals, variations
 from composer.batch import step_clock as clocks
 from composer.batch.initial_states import StateMaker, StateProducer
+from composer.batch.mujoco_batch import MujocoBatchPhysics, batch_model_fields
 from composer.batch.observables import BatchObservables
 from composer.batch.physics import BatchPhysics, device_model_fields
 from composer.batch.state_slots import InitialStateStats, StateSlots
@@ -39,14 +40,15 @@ class BatchTimeStep(NamedTuple):
     """What `BatchEnvironment.reset` and `step` return, one row per world.
 
     The arrays are of the environment's `array_type` (NumPy by default; see
-    `composer.batch.arrays`), computed on the batch's device in float32.
+    `composer.batch.arrays`), computed on the batch's device in its float dtype: float64 on
+    the CPU batch (`mujoco.batch`), float32 on MuJoCo Warp.
 
     Attributes:
       step_type: int8 (num_envs,), `dm_env.StepType` values: FIRST for a world whose
         episode starts, MID, or LAST for one whose episode ended at this step.
-      reward: float32 (num_envs,); 0 for a FIRST world.
-      discount: float32 (num_envs,); 1 for a FIRST world.
-      observation: dict of float32 arrays (num_envs, *the CPU environment's observation
+      reward: float (num_envs,); 0 for a FIRST world.
+      discount: float (num_envs,); 1 for a FIRST world.
+      observation: dict of float arrays (num_envs, *the CPU environment's observation
         shape).
     """
 
@@ -83,21 +85,20 @@ def _check_arguments(
         raise ValueError(
             f"autoreset_mode: expected one of {list(AUTORESET_MODES)}, got {autoreset_mode!r}"
         )
-    if device is not None and not isinstance(device, str):
-        raise ValueError(
-            f"device: expected a Warp device name such as 'cpu' or 'cuda:0', got {device!r}"
-        )
     if not isinstance(time_limit, numbers.Real) or math.isnan(time_limit) or time_limit < 0:
         raise ValueError(f"time_limit: expected a number of seconds >= 0, got {time_limit!r}")
     for name, value in counts.items():
         argument_checks.integer(**{name: value})
 
 
-def _array_bridge(device: str | None, array_type: str, namespace: str | None) -> arrays.ArrayBridge:
-    """The `ArrayBridge` of the batch's Warp device (None: `_warp.default_device()`)."""
-    wp = _warp.load(device).warp
-    device = _warp.default_device() if device is None else device
-    return arrays.ArrayBridge(wp, wp.get_device(device), array_type, namespace)
+def _array_bridge(
+    device: devices.Device, array_type: str, namespace: str | None
+) -> arrays.ArrayBridge:
+    """The `ArrayBridge` of the batch's device: NumPy memory on the CPU batch, else Warp's."""
+    if not device.on_warp:
+        return arrays.ArrayBridge.host(array_type, namespace)
+    wp = _warp.load(device.warp_name).warp
+    return arrays.ArrayBridge(wp, wp.get_device(device.warp_name), array_type, namespace)
 
 
 class _HostModel(NamedTuple):
@@ -133,7 +134,7 @@ def _random_states(num_envs: int, random_state, random_states) -> list[np.random
 
 
 class BatchEnvironment:
-    """Runs `num_envs` worlds of a composer task on a MuJoCo Warp device, as one batch.
+    """Runs `num_envs` worlds of a composer task as one batch, on the CPU or a GPU.
 
     The task's MJCF is compiled once through `mjcf` (the host `mjcf.Physics`, on which the
     `after_compile` hooks run once), then put on `device` with `num_envs` worlds. Each world
@@ -152,8 +153,10 @@ class BatchEnvironment:
     Args:
       task: a `composer.Task` with a registered batched version, or a `BatchTask`.
       num_envs: the number of worlds.
-      device: the Warp device: "cpu" or "cuda:0"; None picks CUDA when Warp sees a GPU,
-        else the CPU device with a warning.
+      device: "cpu" (`mujoco.batch` on C threads, float64, each world bit for bit the CPU
+        environment's), "warp-cpu" (MuJoCo Warp's CPU device) or a CUDA device such as
+        "cuda:0" (MuJoCo Warp); None picks "cuda:0" when MuJoCo Warp sees a GPU, else "cpu"
+        (`composer.batch.devices`).
       time_limit: seconds of simulated time after which a world's episode ends (LAST).
       random_state: an int seed or `np.random.RandomState` from which each world's random
         generator is seeded (ignored when `random_states` is given).
@@ -164,6 +167,8 @@ class BatchEnvironment:
         task's own and those its episodes vary (`composer.batch.variations`; see
         `BatchPhysics`).
       nconmax, njmax: per-world contact and constraint capacity for MuJoCo Warp.
+      threads: the C threads that step the worlds on the CPU batch (None: the cores this
+        process may use); MuJoCo Warp's devices take None only.
       array_type: what `reset` and `step` hand out: "numpy", "warp", "torch" or "jax" (see
         `composer.batch.arrays`). Actions may be NumPy, Warp, torch or JAX arrays whatever
         the array type.
@@ -211,6 +216,7 @@ class BatchEnvironment:
         refill_interval: int = 8,
         check_action_values: bool | None = None,
         namespace: str | None = None,
+        threads: int | None = None,
     ):
         self.num_envs = argument_checks.integer(num_envs=num_envs)
         _check_arguments(
@@ -228,9 +234,17 @@ class BatchEnvironment:
         self._n_sub_steps = self._sub_steps_per_control_step(n_sub_steps)
         self._random_states = _random_states(self.num_envs, random_state, random_states)
         host = self._compile_on_host(hooks)
-        self._arrays = _array_bridge(device, array_type, namespace)
+        self._device = devices.resolve(device)
+        if threads is not None and self._device.on_warp:
+            raise ValueError(
+                f"threads: {threads!r} sets the CPU batch's C threads; device "
+                f"{self._device.name!r} (MuJoCo Warp) takes threads=None"
+            )
+        self._arrays = _array_bridge(self._device, array_type, namespace)
         fields = self._per_world_fields(host, batched_model_fields)
-        self._physics = self._put_worlds_on_device(host, fields, nconmax=nconmax, njmax=njmax)
+        self._physics = self._put_worlds_on_device(
+            host, fields, nconmax=nconmax, njmax=njmax, threads=threads
+        )
         self._set_step_rules(host.physics, autoreset_mode, check_action_values)
         self._observables = self._batch_observables(strip_singleton_obs_buffer_dim)
         self._step_limit = control_step_limit(
@@ -284,9 +298,8 @@ class BatchEnvironment:
           episodes vary that MuJoCo Warp batches, each once; `host`: the varied fields that
           MuJoCo Warp does not have (see `variations.per_world_fields`).
         """
-        varied = variations.per_world_fields(
-            host.varied, device_model_fields(), host.physics.model.ptr
-        )
+        batchable = device_model_fields() if self._device.on_warp else batch_model_fields()
+        varied = variations.per_world_fields(host.varied, batchable, host.physics.model.ptr)
         device = (*self._batch_task.batched_model_fields, *batched_model_fields, *varied.device)
         return variations.PerWorldFields(device=tuple(dict.fromkeys(device)), host=varied.host)
 
@@ -297,17 +310,28 @@ class BatchEnvironment:
         *,
         nconmax: int | None,
         njmax: int | None,
-    ) -> BatchPhysics:
-        """The `BatchPhysics` of `num_envs` worlds of the host model, on which the
-        `BatchTask`'s `after_compile` has run."""
-        physics = BatchPhysics(
-            host.physics,
-            self.num_envs,
-            arrays=self._arrays,
-            batched_model_fields=fields.device,
-            nconmax=nconmax,
-            njmax=njmax,
-        )
+        threads: int | None,
+    ) -> "BatchPhysics | MujocoBatchPhysics":
+        """The physics of `num_envs` worlds of the host model (`MujocoBatchPhysics` on the
+        CPU batch, `BatchPhysics` on MuJoCo Warp), on which the `BatchTask`'s
+        `after_compile` has run."""
+        if self._device.on_warp:
+            physics = BatchPhysics(
+                host.physics,
+                self.num_envs,
+                arrays=self._arrays,
+                batched_model_fields=fields.device,
+                nconmax=nconmax,
+                njmax=njmax,
+            )
+        else:
+            physics = MujocoBatchPhysics(
+                host.physics,
+                self.num_envs,
+                arrays=self._arrays,
+                batched_model_fields=fields.device,
+                threads=threads,
+            )
         self._batch_task.after_compile(physics)
         return physics
 
@@ -324,6 +348,7 @@ class BatchEnvironment:
         )
         self._action_spec = self._batch_task.task.action_spec(host_physics)
         self._action_shape = (self.num_envs, *self._action_spec.shape)
+        self._float_type = getattr(self._physics.xp, self._physics.float_dtype.name)
         task_type = type(self._batch_task)
         self._default_discount = task_type.get_discount is BatchTask.get_discount
         self._default_termination = (
@@ -389,7 +414,7 @@ class BatchEnvironment:
         self._mask, self._mask_view = self._arrays.empty((n,), bool)
         self._steps = self._arrays.asarray(np.zeros(n, np.int32))
         self._ended = self._arrays.asarray(np.zeros(n, bool))
-        self._discount = self._arrays.asarray(np.ones(n, np.float32))
+        self._discount = self._arrays.asarray(np.ones(n, self._physics.float_dtype))
         self._zero = xp.zeros_like(self._discount)
         self._one = xp.ones_like(self._discount)
         self._step_types = {
@@ -416,8 +441,10 @@ class BatchEnvironment:
         self._clock = clocks.STOPPED if clock is None else clock
 
     def synchronize(self) -> None:
-        """Waits until every launch on the batch's device has finished."""
-        _warp.load().warp.synchronize_device(self._physics.device)
+        """Waits until every launch on the batch's device has finished (the CPU batch's
+        calls return when their work is done)."""
+        if self._device.on_warp:
+            _warp.load().warp.synchronize_device(self._physics.device)
 
     @property
     def cameras(self):
@@ -426,8 +453,9 @@ class BatchEnvironment:
         return self._observables.cameras
 
     @property
-    def physics(self) -> BatchPhysics:
-        """The `BatchPhysics` of all worlds."""
+    def physics(self) -> "BatchPhysics | MujocoBatchPhysics":
+        """The physics of all worlds: `MujocoBatchPhysics` on the CPU batch, `BatchPhysics`
+        on MuJoCo Warp."""
         return self._physics
 
     @property
@@ -597,7 +625,11 @@ class BatchEnvironment:
         clock = self._clock
         clock.start()
         checked = actions.check_action(
-            action, self._action_shape, self._arrays, check_values=self._check_action_values
+            action,
+            self._action_shape,
+            self._arrays,
+            check_values=self._check_action_values,
+            dtype=self._physics.float_dtype,
         )
         clock.lap("action")
         if not self._started:
@@ -613,12 +645,13 @@ class BatchEnvironment:
             # These worlds were stepped with the others; their reset overwrites that step.
             self._start_episodes(restarting)
             clock.lap("start_episodes")
-        reward = xp.astype(task.get_reward(physics), xp.float32, copy=False)
+        floats = self._float_type
+        reward = xp.astype(task.get_reward(physics), floats, copy=False)
         # BatchTask's own discount (1) and termination (never) need no arrays of their own.
         discount = (
             self._one
             if self._default_discount
-            else xp.astype(task.get_discount(physics), xp.float32, copy=False)
+            else xp.astype(task.get_discount(physics), floats, copy=False)
         )
         terminated = (
             None

@@ -1,4 +1,5 @@
-"""Does a batch match the CPU environment? World by world, step by step, to float32.
+"""Does a batch match the CPU environment? World by world, step by step: bit for bit on the
+CPU batch (`device="cpu"`), to float32 on MuJoCo Warp.
 
 `compare(task_factory)` runs `num_envs` CPU `composer.Environment`s and one
 `BatchEnvironment` of the same task, world i of the batch seeded like CPU environment i (so
@@ -8,7 +9,8 @@ float32 bound below. From a shell, for a function `make_task()` returning the CP
 
     python -m composer.batch.equivalence my_package.tasks:make_task --steps 50
 
-prints the report and exits with status 1 when a world leaves the bound.
+prints the report and exits with status 1 when a world leaves the bound (`--device cpu`:
+when any value of any world differs from its CPU environment's).
 
 The bound, derived rather than fitted (the project's own equivalence tests use it): Warp
 computes in float32 (machine epsilon `EPS`), C MuJoCo in float64, so each physics step adds
@@ -37,10 +39,12 @@ import sys
 from collections.abc import Callable, Mapping, Sequence
 from typing import NamedTuple
 
+import dm_env
 import mujoco
 import numpy as np
 
 import composer
+from composer.batch import devices
 from composer.batch.environment import BatchEnvironment
 from composer.batch.task import BatchTask
 from composer.utils import argument_checks
@@ -121,7 +125,8 @@ class EquivalenceReport(NamedTuple):
         value above 1 left the bound); how much room the batch has.
       rounded_cpu_first: the same for CPU environments whose state (positions,
         velocities, activations) is rounded to float32 after the reset and every control
-        step, or None: C MuJoCo's own sensitivity to float32. Where these leave the bound
+        step, or None (always on the CPU batch, compared exactly): C MuJoCo's own
+        sensitivity to float32. Where these leave the bound
         too, the task amplifies rounding there (an impact, a body landing flat) and a
         batch cannot be expected to stay within it either.
     """
@@ -228,7 +233,8 @@ def compare(
     time_limit: float = float("inf"),
     factors: Mapping[str, float] | None = None,
     batch_task: Callable[[composer.Task], BatchTask] | None = None,
-    device: str = "cpu",
+    device: str = "warp-cpu",
+    autoreset_mode: str = "next_step",
 ) -> EquivalenceReport:
     """Steps `num_envs` CPU environments and a batch of the same task side by side.
 
@@ -253,7 +259,12 @@ def compare(
         slope times the state errors it adds up, a servo torque's kv.
       batch_task: makes the `BatchTask` from the CPU task; None looks the task's class up
         in the registry (`composer.batch.register`).
-      device: the batch's Warp device.
+      device: the batch's device (`composer.batch.devices`). On the CPU batch ("cpu") every
+        value is compared exactly: a world must equal its CPU environment bit for bit
+        (the report's bounds are 0, and no rounded CPU twins run).
+      autoreset_mode: the batch's; under "same_step" a CPU environment whose episode
+        ended is reset at once, its LAST step carrying the new episode's first
+        observation, as the batch's does.
 
     Returns:
       An `EquivalenceReport`; `report.first` names the first value outside its bound.
@@ -273,7 +284,8 @@ def compare(
             for s in seeds
         ]
 
-    cpu_envs, twins = cpu_environments(), cpu_environments()
+    exact = not devices.resolve(device).on_warp
+    cpu_envs, twins = cpu_environments(), ([] if exact else cpu_environments())
     task = task_factory()
     batch_env = BatchEnvironment(
         task if batch_task is None else batch_task(task),
@@ -281,7 +293,9 @@ def compare(
         device=device,
         time_limit=time_limit,
         random_states=seeds,
+        autoreset_mode=autoreset_mode,
     )
+    same_step = autoreset_mode == "same_step"
     try:
         spec = cpu_envs[0].action_spec()
         if actions is None:
@@ -299,17 +313,22 @@ def compare(
         for step in range(control_steps + 1):
             if step:
                 batch_step = batch_env.step(actions[step - 1])
-                cpu_steps = [env.step(a) for env, a in zip(cpu_envs, actions[step - 1])]
-                twin_steps = [env.step(a) for env, a in zip(twins, actions[step - 1])]
+                cpu_steps = [
+                    _cpu_step(env, a, same_step) for env, a in zip(cpu_envs, actions[step - 1])
+                ]
+                twin_steps = [
+                    _cpu_step(env, a, same_step) for env, a in zip(twins, actions[step - 1])
+                ]
             physics_steps = step * n_sub_steps + 1
             batch_states = {f: physics.arrays.to_host(getattr(physics.data, f)) for f in _STATE}
-            compared = (
-                (batch_comparison, batch_states, batch_step),
-                (twin_comparison, _cpu_states(twins), _stacked(twin_steps)),
-            )
+            compared = [(batch_comparison, batch_states, batch_step)]
+            if twins:
+                compared.append((twin_comparison, _cpu_states(twins), _stacked(twin_steps)))
             for comparison, states, outputs in compared:
-                _compare_states(comparison, step, physics_steps, factors, states, cpu_envs)
-                _compare_outputs(comparison, step, physics_steps, factors, outputs, cpu_steps)
+                _compare_states(comparison, step, physics_steps, factors, states, cpu_envs, exact)
+                _compare_outputs(
+                    comparison, step, physics_steps, factors, outputs, cpu_steps, exact
+                )
             for twin in twins:
                 _round_state(twin.physics)
     finally:
@@ -327,6 +346,15 @@ def compare(
 # The state compared, field by field; and the state a rounded twin has rounded.
 _STATE = ("qpos", "qvel")
 _PHYSICS_STATE = mujoco.mjtState.mjSTATE_PHYSICS
+
+
+def _cpu_step(env: composer.Environment, action, same_step: bool) -> dm_env.TimeStep:
+    """A CPU environment's step; under "same_step" autoreset, a LAST step carries the next
+    episode's first observation (the environment is reset at once), as a batch's does."""
+    time_step = env.step(action)
+    if same_step and time_step.last():
+        time_step = time_step._replace(observation=env.reset().observation)
+    return time_step
 
 
 def _cpu_states(envs) -> dict[str, np.ndarray]:
@@ -363,28 +391,30 @@ def _stacked(time_steps) -> _Outputs:
     )
 
 
-def _compare_states(comparison, step, physics_steps, factors, states, cpu_envs):
-    """Compares every world's qpos and qvel with the CPU environments'."""
+def _compare_states(comparison, step, physics_steps, factors, states, cpu_envs, exact):
+    """Compares every world's qpos and qvel with the CPU environments' (bit for bit where
+    `exact`)."""
     model = cpu_envs[0].physics.model.ptr
     expected_states = _cpu_states(cpu_envs)
     for field, addresses in (("qpos", model.jnt_qposadr), ("qvel", model.jnt_dofadr)):
         expected = expected_states[field]
-        allowed = bound(expected, physics_steps, factors.get(field, 1.0))
+        allowed = None if exact else bound(expected, physics_steps, factors.get(field, 1.0))
         comparison.check(field, step, states[field], expected, allowed, addresses)
 
 
-def _compare_outputs(comparison, step, physics_steps, factors, batch, cpus):
-    """Compares every world's observations, reward, discount and step type."""
+def _compare_outputs(comparison, step, physics_steps, factors, batch, cpus, exact):
+    """Compares every world's observations, reward, discount and step type (bit for bit
+    where `exact`)."""
     for key in cpus[0].observation:
         expected = np.array([t.observation[key] for t in cpus])
         got = np.asarray(batch.observation[key])
-        exact = expected.dtype.kind in "biu"
-        allowed = None if exact else bound(expected, physics_steps, factors.get(key, 1.0))
+        whole = exact or expected.dtype.kind in "biu"
+        allowed = None if whole else bound(expected, physics_steps, factors.get(key, 1.0))
         comparison.check(f"observation {key!r}", step, got, expected, allowed)
     expected_outputs = _stacked(cpus)
     for name in ("reward", "discount"):
         expected = getattr(expected_outputs, name).astype(np.float64)
-        allowed = bound(expected, physics_steps, factors.get(name, 1.0))
+        allowed = None if exact else bound(expected, physics_steps, factors.get(name, 1.0))
         comparison.check(name, step, np.asarray(getattr(batch, name)), expected, allowed)
     got_types = np.asarray(batch.step_type)
     comparison.check("step_type", step, got_types, expected_outputs.step_type, None)
@@ -418,6 +448,9 @@ def main(argv: Sequence[str] | None = None) -> int:
     parser.add_argument("--seed", type=int, default=0)
     parser.add_argument("--time-limit", type=float, default=float("inf"))
     parser.add_argument(
+        "--device", default="warp-cpu", help="the batch's device; 'cpu' compares exactly"
+    )
+    parser.add_argument(
         "--factor", action="append", default=[], help="NAME=GAIN for a quantity's bound"
     )
     args = parser.parse_args(argv)
@@ -428,6 +461,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         seed=args.seed,
         time_limit=args.time_limit,
         factors=_parse_factors(args.factor),
+        device=args.device,
     )
     print(report)
     return 0 if report.passed else 1

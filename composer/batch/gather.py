@@ -55,19 +55,19 @@ class FieldGather:
         self.field = field
         self.shape = entries.shape[:-1]
         self.entries = entries.reshape(-1, entries.shape[-1])
+        floats = physics.float_dtype
         self.weights = (
-            np.ones(self.entries.shape, np.float32)
+            np.ones(self.entries.shape, floats)
             if weights is None
-            else np.asarray(weights, np.float32).reshape(self.entries.shape)
+            else np.asarray(weights, floats).reshape(self.entries.shape)
         )
         names = np.full(self.shape, "identity") if ops is None else np.asarray(ops)
         unknown = sorted(set(names.ravel()) - set(OPS))
         if unknown:
             raise ValueError(f"ops: expected names among {list(OPS)}, got {unknown}")
         self.ops = np.vectorize(OPS.__getitem__, otypes=[np.int32])(names).reshape(-1)
-        scalar = getattr(field.device_array.dtype, "_wp_scalar_type_", field.device_array.dtype)
-        #: Whether `ObservationGather` can read it (a float32 field on the device).
-        self.gatherable = scalar is _warp.load().warp.float32
+        #: Whether `ObservationGather` can read it (a field of the batch's float dtype).
+        self.gatherable = field.gatherable
         flat = self.entries[:, 0]
         plain = (
             self.entries.shape[1] == 1 and not self.ops.any() and bool(np.all(self.weights == 1.0))
@@ -114,7 +114,7 @@ class FieldGather:
             if isinstance(sources, slice) and sources.step in (None, 1):
                 if self._slice_items is None:
                     self._slice_items = _RowItems(flat[:, sources])
-                values = np.empty((out.shape[0], sources.stop - sources.start), np.float32)
+                values = np.empty((out.shape[0], sources.stop - sources.start), out.dtype)
                 self._slice_items.copy_to(values)
             elif isinstance(sources, slice):
                 values = np.ascontiguousarray(flat[:, sources])
@@ -181,7 +181,7 @@ def _numpy_plan(entries, weights, ops) -> "_Product | _Trigonometric | None":
     if not ops.any():
         low, high = int(entries.min()), int(entries.max()) + 1
         if np.unique(entries).size == high - low:
-            matrix = np.zeros((high - low, entries.shape[0]), np.float32)
+            matrix = np.zeros((high - low, entries.shape[0]), weights.dtype)
             columns = np.broadcast_to(np.arange(entries.shape[0])[:, None], entries.shape)
             np.add.at(matrix, (entries - low, columns), weights)
             return _Product(slice(low, high), matrix)
@@ -239,10 +239,22 @@ class ObservationGather:
     CHUNK_BYTES = 1 << 22
 
     def __init__(self, physics, readers: dict[str, FieldGather]):
+        self._physics = physics
+        self._readers = readers
+        self._in_numpy = physics.arrays.library == "numpy"
+        self._dtype = physics.float_dtype
+        n = physics.num_envs
+        if self._in_numpy:
+            self._layout: dict[str, tuple[int, int, tuple[int, ...]]] = {}
+            offset = 0
+            for name, reader in readers.items():
+                width = reader.entries.shape[0]
+                self._layout[name] = (offset, n * width, reader.shape)
+                offset += n * width
+            self._size = offset
+            return
         wp = _warp.load().warp
         self._wp = wp
-        self._physics = physics
-        n = physics.num_envs
         sources: dict[int, int] = {}  # device address -> source index
         pointers, rows, sizes = [], [], []
         column_source, column_out, column_terms, column_op = [], [], [], []
@@ -293,8 +305,6 @@ class ObservationGather:
         self._launch = None
         self._chunk_view = None
         self._next = self._reads_per_chunk  # the next read's row in the chunk
-        self._readers = readers
-        self._in_numpy = physics.arrays.library == "numpy"
 
     def _new_chunk(self) -> None:
         chunk, self._chunk_view = self._physics.arrays.empty(
@@ -317,11 +327,12 @@ class ObservationGather:
         """Every gathered observable of every world, by key, in new device memory.
 
         Returns:
-          Arrays of the batch's namespace, (num_envs, *value shape), float32.
+          Arrays of the batch's namespace, (num_envs, *value shape), of the batch's float
+          dtype.
         """
         n = self._physics.num_envs
         if self._in_numpy:
-            block = np.empty(self._size, np.float32)
+            block = np.empty(self._size, self._dtype)
             values = {}
             for name, (offset, size, shape) in self._layout.items():
                 rows = block[offset : offset + size].reshape((n, size // n))

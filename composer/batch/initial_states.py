@@ -86,7 +86,7 @@ class ProducedStates(NamedTuple):
       episodes: int64 (states,): the episode of its world each state starts.
       state: float64 (states, state size): the `mj_getState(mjSTATE_INTEGRATION)` vectors.
       model_rows: field name -> (states, *a world's row shape), the field's dtype.
-      values: name -> float32 (states, *value shape): the `BatchTask.initial_values`.
+      values: name -> float64 (states, *value shape): the `BatchTask.initial_values`.
       shared: as `InitialState.shared`, the same for every state of one maker.
       generators: per job that came with a generator's state (not a `RandomState`), its
         world and its generator's state after drawing the job's episodes.
@@ -184,7 +184,7 @@ class StateMaker:
             state=state,
             model_rows={name: getattr(model, name).copy() for name in self._model_fields},
             values={
-                name: np.asarray(value, dtype=np.float32)
+                name: np.asarray(value, dtype=np.float64)
                 for name, value in self._batch_task.initial_values().items()
             },
             shared=self._shared,

@@ -136,6 +136,12 @@ class BatchObservables:
             if isinstance(o, MJCFCamera) and name not in readers
         }
         self._cameras = None
+        if cameras and not physics.on_warp:
+            raise NotImplementedError(
+                f"camera observables {sorted(cameras)}: the CPU batch (device='cpu') does not "
+                "render cameras yet; pass device='warp-cpu' (MuJoCo Warp's CPU device) or a "
+                "CUDA device, or disable these observables"
+            )
         if cameras:
             from composer.batch.cameras import BatchCameras
 
@@ -151,6 +157,8 @@ class BatchObservables:
         self._image_names = frozenset(cameras)
         self._add_buffer_axis = not strip_singleton_obs_buffer_dim
         self._xp = physics.xp
+        self._float_dtype = physics.float_dtype
+        self._float_type = getattr(physics.xp, physics.float_dtype.name)
         gathered = {
             name: reader
             for name, reader in self._readers.items()
@@ -166,15 +174,17 @@ class BatchObservables:
         return self._cameras
 
     def dtype(self, name: str) -> np.dtype:
-        """The NumPy dtype of observation `name`: float32, or a camera image's own."""
+        """The NumPy dtype of observation `name`: the batch's float dtype, or a camera
+        image's own."""
         if name in self._image_names:
             return self._cameras.dtype(name)
-        return np.dtype(np.float32)
+        return self._float_dtype
 
     def read(self) -> dict[str, Any]:
         """Returns the current observation of every world, by key, as new arrays.
 
-        Features are float32; camera images have their CPU observable's dtype (`dtype`).
+        Features have the batch's float dtype; camera images have their CPU observable's
+        dtype (`dtype`).
 
         Returns:
           A dict of arrays of the batch's namespace, of shape (num_envs, 1, *value shape),
@@ -186,7 +196,7 @@ class BatchObservables:
         values = self._gather.read() if self._gather is not None else {}
         for name, read in self._called.items():
             value = read()
-            dtype = value.dtype if name in self._image_names else xp.float32
+            dtype = value.dtype if name in self._image_names else self._float_type
             values[name] = xp.astype(value, dtype, copy=True)
         if not self._add_buffer_axis:
             return {name: values[name] for name in self._readers}

@@ -26,7 +26,13 @@ import numpy as np
 import mjcf
 from composer.batch import _warp, kernels
 from composer.batch.arrays import ArrayBridge, array_library, row_items
-from composer.batch.bindings import BatchBinding, FieldView, NamedViews, StructViews
+from composer.batch.bindings import (
+    BatchBinding,
+    FieldStorage,
+    FieldView,
+    NamedViews,
+    StructViews,
+)
 from mujoco_physics import field_layout
 
 __all__ = ["BatchPhysics", "ContactWatch", "device_model_fields"]
@@ -97,11 +103,15 @@ class BatchPhysics:
 
     Attributes:
       xp: the array namespace of every read (NumPy on Warp's CPU device, torch on CUDA).
+      float_dtype: float32, the dtype of MuJoCo Warp's float fields.
       state_size: the length of one world's state in `set_state` (`mjSTATE_INTEGRATION`).
 
     Raises:
       ValueError: for a field in `batched_model_fields` that MuJoCo Warp does not batch.
     """
+
+    float_dtype = np.dtype(np.float32)
+    on_warp = True
 
     def __init__(
         self,
@@ -188,6 +198,27 @@ class BatchPhysics:
                 raise AttributeError(f"MuJoCo has no array {struct} field {name!r}")
             field = self._fields[key] = FieldView(self, struct, name)
         return field
+
+    def field_storage(self, struct: str, name: str) -> FieldStorage:
+        """The `FieldStorage` of field `name`: a view of MuJoCo Warp's own array.
+
+        Raises:
+          AttributeError: for a field MuJoCo has but MuJoCo Warp does not simulate.
+        """
+        host = self.mj_model if struct == field_layout.MODEL else self.host.data.ptr
+        per_world = struct == field_layout.DATA or name in self.batched_model_fields
+        owner = self.warp_model if struct == field_layout.MODEL else self.warp_data
+        try:
+            device_array = getattr(owner, name)
+        except AttributeError:
+            raise AttributeError(
+                f"MuJoCo Warp has no {struct} field {name!r} (MuJoCo has it; Warp does not "
+                "simulate it)"
+            ) from None
+        rows = self.num_envs if per_world else 1
+        view = self.arrays.view(device_array, (rows, *np.shape(getattr(host, name))))
+        scalar = getattr(device_array.dtype, "_wp_scalar_type_", device_array.dtype)
+        return FieldStorage(view, per_world, scalar is self._wp.float32, device_array)
 
     def bind(self, elements) -> BatchBinding:
         """The batched fields of an MJCF element or a list of them (see `BatchBinding`).

@@ -79,7 +79,8 @@ class StateSlots:
         slots_per_world: int = 3,
         refill_interval: int = 8,
     ):
-        wp = _warp.load().warp
+        self._on_warp = physics.on_warp
+        wp = _warp.load().warp if self._on_warp else None
         self._wp = wp
         self._physics = physics
         self._producer = producer
@@ -89,23 +90,36 @@ class StateSlots:
         self.refill_interval = int(refill_interval)
         n, k = physics.num_envs, self.slots_per_world
         device = physics.device
+        floats = physics.float_dtype
         # Row 0: episodes each world has started; row 1: of those, how many reused a state.
-        self._counters = wp.zeros((2, n), dtype=wp.int32, device=device)
-        self._uploaded_on_device = wp.zeros(n, dtype=wp.int32, device=device)
-        self._chosen = wp.zeros((n, physics.state_size), dtype=wp.float32, device=device)
-        self._slot_states = self._host_backed((n * k, physics.state_size))
+        if self._on_warp:
+            self._counters = wp.zeros((2, n), dtype=wp.int32, device=device)
+            self._uploaded_on_device = wp.zeros(n, dtype=wp.int32, device=device)
+            self._chosen = wp.zeros((n, physics.state_size), dtype=wp.float32, device=device)
+        else:
+            self._counters = np.zeros((2, n), np.int32)
+            self._uploaded_on_device = np.zeros(n, np.int32)
+            self._chosen = np.zeros((n, physics.state_size), floats)
+        self._slot_states = self._host_backed((n * k, physics.state_size), floats)
         self._slot_rows = {}
         self._row_targets = {}
         for name in self._model_fields:
             field = physics.field("model", name)
-            if _scalar(field.device_array.dtype) is not wp.float32:
+            if self._on_warp:
+                floating = _scalar(field.device_array.dtype) is wp.float32
+            else:
+                floating = np.issubdtype(field.view.dtype, np.floating)
+            if not floating:
                 raise ValueError(
                     f"batched_model_fields: {name!r} is not a float field on the device; an "
                     "initial state can only set float model fields"
                 )
             size = int(np.prod(field.c_shape))
-            self._slot_rows[name] = self._host_backed((n * k, size))
-            self._row_targets[name] = kernels.rows(field.device_array, wp.float32, n)
+            if self._on_warp:
+                self._slot_rows[name] = self._host_backed((n * k, size), np.float32)
+                self._row_targets[name] = kernels.rows(field.device_array, wp.float32, n)
+            else:
+                self._slot_rows[name] = self._host_backed((n * k, size), field.view.dtype)
         self._slot_values: dict = {}
         self._value_targets: dict = {}
         self.values: dict = {}
@@ -120,8 +134,12 @@ class StateSlots:
         self._clear_bookkeeping()
         self._stats = InitialStateStats(0, 0, 0, 0.0)
 
-    def _host_backed(self, shape):
-        """(device array, host array): the same memory on the CPU device, a mirror on CUDA."""
+    def _host_backed(self, shape, dtype):
+        """(device array, host array): the same memory on the CPU devices, a mirror on
+        CUDA."""
+        if not self._on_warp:
+            array = np.zeros(shape, dtype)
+            return array, array
         wp = self._wp
         array = wp.zeros(shape, dtype=wp.float32, device=self._physics.device)
         host = np.zeros(shape, np.float32) if self._physics.is_cuda else array.numpy()
@@ -136,7 +154,7 @@ class StateSlots:
     def stats(self) -> InitialStateStats:
         """The producers' `InitialStateStats` since the last `restart` (reads the device's
         counters: one device-to-host copy)."""
-        started, reused = self._counters.numpy().astype(np.int64).sum(axis=1)
+        started, reused = self._counter_values().sum(axis=1)
         return self._stats._replace(started=int(started), reused=int(reused))
 
     def restart(self, random_states: list) -> None:
@@ -145,15 +163,21 @@ class StateSlots:
         self._drop_pending()
         self._generator_states.clear()
         self.random_states[:] = random_states
-        self._counters.zero_()
-        self._uploaded_on_device.zero_()
+        if self._on_warp:
+            self._counters.zero_()
+            self._uploaded_on_device.zero_()
+        else:
+            self._counters[...] = 0
+            self._uploaded_on_device[...] = 0
         self._clear_bookkeeping()
         self._control_steps = 0
         self._stats = InitialStateStats(0, 0, 0, 0.0)
 
     def sync_generators(self) -> None:
         """Sets each world's `random_states` entry to the state its worker process left it
-        in (process producers send generator states back, not generators)."""
+        in (process producers send generator states back, not generators), after waiting
+        for the jobs in progress, which draw from them (thread workers draw in place)."""
+        self._collect()
         for world, state in self._generator_states.items():
             self.random_states[world].set_state(state)
         self._generator_states.clear()
@@ -167,8 +191,17 @@ class StateSlots:
 
     # Applying.
 
+    def _counter_values(self) -> np.ndarray:
+        """The counters as int64 NumPy (2, num_envs): one device-to-host copy on CUDA."""
+        counters = self._counters.numpy() if self._on_warp else self._counters
+        return counters.astype(np.int64)
+
     def apply(self, mask) -> None:
-        """Starts the next episode of the worlds of `mask` (a Warp bool array)."""
+        """Starts the next episode of the worlds of `mask` (a Warp bool array; NumPy on
+        the CPU batch)."""
+        if not self._on_warp:
+            self._apply_on_host(mask)
+            return
         wp, physics = self._wp, self._physics
         k = self.slots_per_world
         take = kernels.kernels().take_slots
@@ -195,6 +228,21 @@ class StateSlots:
             device=physics.device,
         )
 
+    def _apply_on_host(self, mask) -> None:
+        """`apply` on the CPU batch: the same steps, as NumPy writes into its rows."""
+        physics, k = self._physics, self.slots_per_world
+        worlds = np.flatnonzero(np.asarray(mask, dtype=bool))
+        started = self._counters[0, worlds]
+        rows = worlds * k + started % k
+        self._chosen[worlds] = self._slot_states[1][rows]
+        physics.set_state(self._chosen, mask)
+        for name, (_, host) in self._slot_rows.items():
+            physics.set_model_rows(name, host[rows], worlds)
+        for name, target in self._value_targets.items():
+            target[worlds] = self._slot_values[name][1][rows]
+        self._counters[1, worlds] += started >= self._uploaded_on_device[worlds]
+        self._counters[0, worlds] = started + 1
+
     # Refilling.
 
     def after_step(self) -> None:
@@ -218,7 +266,7 @@ class StateSlots:
             reset of every world needs it); the other slots fill in the background.
         """
         self._steps = 0
-        started, reused = self._counters.numpy().astype(np.int64)
+        started, reused = self._counter_values()
         self._warn_about_reuse(int(reused.sum()), int(started.sum()))
         if self._pending is not None:
             lacking = bool(np.any(self._uploaded <= started))
@@ -310,7 +358,10 @@ class StateSlots:
             for name, (_, host) in self._slot_values.items():
                 host[rows] = produced.values[name].reshape(rows.size, -1)
             np.maximum.at(self._uploaded, produced.worlds, produced.episodes + 1)
-        self._uploaded_on_device.assign(self._uploaded.astype(np.int32))
+        if self._on_warp:
+            self._uploaded_on_device.assign(self._uploaded.astype(np.int32))
+        else:
+            self._uploaded_on_device[...] = self._uploaded
         if self._physics.is_cuda:
             for array, host in (
                 self._slot_states,
@@ -329,8 +380,9 @@ class StateSlots:
         for name, stacked in values.items():
             shape = stacked.shape[1:]
             size = int(np.prod(shape))
-            self._slot_values[name] = self._host_backed((n * k, size))
-            target, view = arrays.empty((n, size), np.float32)
+            floats = self._physics.float_dtype
+            self._slot_values[name] = self._host_backed((n * k, size), floats)
+            target, view = arrays.empty((n, size), floats)
             self._value_targets[name] = target
             self.values[name] = view.reshape((n, *shape))
 
@@ -338,6 +390,10 @@ class StateSlots:
         if self._shared_written is not None:
             return
         self._shared_written = shared
+        if not self._on_warp:
+            for name, value in shared.items():
+                self._physics.set_shared_model_field(name, value)
+            return
         for name, value in shared.items():
             try:
                 array = getattr(self._physics.warp_model, name)

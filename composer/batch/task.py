@@ -97,7 +97,7 @@ class BatchTask:
 
         Called on a state producer right after the CPU task's `initialize_episode` hooks;
         each world's values for its current episode are then in `self.episode_values`
-        (float32). None by default.
+        (in the batch's float dtype). None by default.
 
         Returns:
           A dict of arrays of a fixed shape each (one episode of one world).
@@ -134,7 +134,8 @@ class BatchTask:
     def get_discount(self, physics) -> Any:
         """Returns every world's discount, shape (num_envs,) (1.0 by default)."""
         xp = physics.xp
-        return xp.ones(physics.num_envs, dtype=xp.float32, device=physics.arrays.xp_device)
+        floats = getattr(xp, physics.float_dtype.name)
+        return xp.ones(physics.num_envs, dtype=floats, device=physics.arrays.xp_device)
 
     def should_terminate_episode(self, physics) -> Any:
         """Returns which worlds' episodes end after this step, bool (num_envs,) (none)."""

@@ -50,7 +50,7 @@ def main(argv: Sequence[str] | None = None) -> None:
                 name,
                 2,
                 seed=0,
-                device="cpu",
+                device="warp-cpu",
                 namespace="torch",
                 # Two control steps: the worlds reset within the steps run.
                 time_limit=1.5 * tc.CONTROL_TIMESTEP,
