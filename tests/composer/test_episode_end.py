@@ -243,7 +243,7 @@ def _batch_with_two_ends(mode: str):
     batch = BatchEnvironment(
         EndsWorldZero(),
         2,
-        device="cpu",
+        device="warp-cpu",
         random_state=0,
         time_limit=3 * control_timestep,
         autoreset_mode=mode,

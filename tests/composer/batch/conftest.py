@@ -1,6 +1,5 @@
-"""The batch tests: Warp's kernel cache under the repository's .cache/, tests marked `warp`
-skipped, with the reason printed, when MuJoCo Warp is not installed, and the default
-device's warning (tested on its own) silenced for the tests that build with the default."""
+"""The batch tests: Warp's kernel cache under the repository's .cache/, and tests marked
+`warp` skipped, with the reason printed, when MuJoCo Warp is not installed."""
 
 import os
 import pathlib
@@ -13,14 +12,6 @@ _REPOSITORY = pathlib.Path(__file__).resolve().parents[3]
 os.environ.setdefault(_warp.KERNEL_CACHE_ENV, str(_REPOSITORY / ".cache" / "warp"))
 
 _SKIP = pytest.mark.skip(reason="needs MuJoCo Warp: pip install -e '.[warp]'")
-
-
-def pytest_configure(config):
-    config.addinivalue_line(
-        # The message's own colon cannot be written in a filter: '.' matches it.
-        "filterwarnings",
-        "ignore:composer.batch. Warp sees no CUDA device:RuntimeWarning",
-    )
 
 
 def pytest_collection_modifyitems(config, items):

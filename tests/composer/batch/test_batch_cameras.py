@@ -51,7 +51,7 @@ FAR_RESOLUTION = 1e-3
 def worlds():
     """A lift_brick_vision batch after random actions, with an RGB, a depth and a
     segmentation camera on 'front_close', and the CPU renderings of each world's state."""
-    env = manipulation_batch.load("lift_brick_vision", NUM_ENVS, seed=5, device="cpu")
+    env = manipulation_batch.load("lift_brick_vision", NUM_ENVS, seed=5, device="warp-cpu")
     task = env.task.task
     camera = task.root_entity.mjcf_model.find("camera", "front_close")
     for name, kind in (("depth", {"depth": True}), ("segmentation", {"segmentation": True})):
@@ -61,7 +61,7 @@ def worlds():
     task.task_observables["front_close"].height = SIZE
     task.task_observables["front_close"].width = SIZE
     env.close()
-    env = batch.BatchEnvironment(task, NUM_ENVS, device="cpu", random_state=5)
+    env = batch.BatchEnvironment(task, NUM_ENVS, device="warp-cpu", random_state=5)
     env.reset()
     spec = env.action_spec()
     rng = np.random.RandomState(0)
@@ -222,7 +222,7 @@ class _BatchLitBox(batch.BatchTask):
 
 def test_a_known_scene_has_its_analytic_colour_on_both_renderers():
     expected = 255 * _LitBox.RGB * (_LitBox.AMBIENT + _LitBox.DIFFUSE)
-    env = batch.BatchEnvironment(_BatchLitBox(_LitBox()), 2, device="cpu")
+    env = batch.BatchEnvironment(_BatchLitBox(_LitBox()), 2, device="warp-cpu")
     ours = np.asarray(env.reset().observation["above"])[:, 0].astype(float)
     env.close()
     cpu = composer.Environment(_LitBox()).reset().observation["above"][0].astype(float)
@@ -234,7 +234,7 @@ def test_a_scene_option_is_refused_naming_the_observable():
     task = _LitBox()
     task.image.scene_option = mujoco.MjvOption()
     with pytest.raises(ValueError, match="observable 'above': option scene_option="):
-        batch.BatchEnvironment(_BatchLitBox(task), 2, device="cpu")
+        batch.BatchEnvironment(_BatchLitBox(task), 2, device="warp-cpu")
 
 
 def test_one_camera_at_two_sizes_is_refused_naming_both_observables():
@@ -243,13 +243,13 @@ def test_one_camera_at_two_sizes_is_refused_naming_both_observables():
     small.enabled = True
     task.extra_observables["small"] = small
     with pytest.raises(ValueError, match="'small': camera .* at 8x8 here and at 16x16 by 'above'"):
-        batch.BatchEnvironment(_BatchLitBox(task), 2, device="cpu")
+        batch.BatchEnvironment(_BatchLitBox(task), 2, device="warp-cpu")
 
 
 def test_a_disabled_camera_is_not_rendered():
     task = _LitBox()
     task.image.enabled = False
-    env = batch.BatchEnvironment(_BatchLitBox(task), 2, device="cpu")
+    env = batch.BatchEnvironment(_BatchLitBox(task), 2, device="warp-cpu")
     assert env.cameras is None
     assert "above" not in env.reset().observation
     env.close()

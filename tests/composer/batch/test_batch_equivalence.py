@@ -155,7 +155,7 @@ def _cpu_environments(name: str) -> list[composer.Environment]:
     ],
 )
 def test_every_world_matches_its_cpu_environment_for_20_control_steps(name):
-    batch_env = manipulation_batch.load(name, NUM_ENVS, random_states=SEEDS, device="cpu")
+    batch_env = manipulation_batch.load(name, NUM_ENVS, random_states=SEEDS, device="warp-cpu")
     cpu_envs = _cpu_environments(name)
     kv = _max_servo_gain(cpu_envs[0])
     n_sub_steps = cpu_envs[0].task.physics_steps_per_control_step
@@ -216,7 +216,7 @@ def test_reassemble_worlds_match_their_cpu_environments_once_the_tower_has_settl
         mujoco.mj_setState(twin.physics.model.ptr, twin.physics.data.ptr, rounded, spec)
         twin.physics.forward()
     # The same seeds as the CPU environments: the same episodes, so the same desired orders.
-    batch_env = manipulation_batch.load(name, NUM_ENVS, random_states=SEEDS, device="cpu")
+    batch_env = manipulation_batch.load(name, NUM_ENVS, random_states=SEEDS, device="warp-cpu")
     batch_env.reset()
     for field in _STATE_FIELDS:
         values = np.array([getattr(env.physics.data, field) for env in cpu_envs])
@@ -261,7 +261,7 @@ def test_each_world_ends_and_restarts_its_episode_on_its_own():
     batch_task = _BatchEndsAfter(_EndsAfter(limit=0), limits)
     # World 0 starts 3 episodes in the 8 steps before the first refill: 4 slots hold them.
     batch_env = BatchEnvironment(
-        batch_task, NUM_ENVS, random_states=SEEDS, device="cpu", slots_per_world=4
+        batch_task, NUM_ENVS, random_states=SEEDS, device="warp-cpu", slots_per_world=4
     )
     cpu_envs = [
         composer.Environment(_EndsAfter(limit), random_state=s) for limit, s in zip(limits, SEEDS)
@@ -341,7 +341,7 @@ def _seated_states(name: str, seed: int) -> tuple[list, list]:
 def _assert_batch_rewards(name, seeds, states, expected):
     """World i of a batch seeded `seeds[i]`, put in `states[i]`, earns `expected[i]` (within
     the reward tolerance of one physics step: the state is set, not simulated)."""
-    batch_env = manipulation_batch.load(name, len(states), random_states=seeds, device="cpu")
+    batch_env = manipulation_batch.load(name, len(states), random_states=seeds, device="warp-cpu")
     batch_env.reset()
     batch_env.physics.data.qpos[...] = np.array(states)
     batch_env.physics.forward()

@@ -19,7 +19,7 @@ def test_make_vec_with_backend_warp_steps_every_world(name):
         num_envs=NUM_ENVS,
         vectorization_mode="vector_entry_point",
         backend="warp",
-        device="cpu",
+        device="warp-cpu",
     )
     assert isinstance(env, gymnasium.vector.VectorEnv)
     observations, _ = env.reset(seed=3)

@@ -48,14 +48,14 @@ def name(request):
 
 @pytest.fixture(scope="module")
 def numpy_run(name):
-    env = manipulation_batch.load(name, NUM_ENVS, seed=3)
+    env = manipulation_batch.load(name, NUM_ENVS, seed=3, device="warp-cpu")
     actions = _actions(env)
     return actions, [env.reset()] + [env.step(action) for action in actions]
 
 
 def test_warp_outputs_equal_the_numpy_outputs_every_step(name, numpy_run):
     actions, expected = numpy_run
-    env = manipulation_batch.load(name, NUM_ENVS, seed=3, array_type="warp")
+    env = manipulation_batch.load(name, NUM_ENVS, seed=3, array_type="warp", device="warp-cpu")
     steps = [env.reset()] + [env.step(action) for action in actions]
     for time_step, reference in zip(steps, expected):
         for value in (time_step.reward, *time_step.observation.values()):
@@ -65,7 +65,7 @@ def test_warp_outputs_equal_the_numpy_outputs_every_step(name, numpy_run):
 
 def test_device_actions_step_the_worlds_as_the_same_numpy_actions(name, numpy_run):
     actions, expected = numpy_run
-    env = manipulation_batch.load(name, NUM_ENVS, seed=3, array_type="warp")
+    env = manipulation_batch.load(name, NUM_ENVS, seed=3, array_type="warp", device="warp-cpu")
     steps = [env.reset()]
     for dtype, action in zip([wp.float32, wp.float64] * STEPS, actions):
         steps.append(env.step(wp.array(action, dtype=dtype, device="cpu")))
@@ -83,7 +83,9 @@ def _zeros(env):
 
 @pytest.fixture(scope="module")
 def warp_env():
-    env = manipulation_batch.load("reach_site_features", NUM_ENVS, seed=1, array_type="warp")
+    env = manipulation_batch.load(
+        "reach_site_features", NUM_ENVS, seed=1, array_type="warp", device="warp-cpu"
+    )
     env.reset()
     return env
 
@@ -151,6 +153,7 @@ def test_gymnasium_vector_env_returns_warp_arrays():
         vectorization_mode="vector_entry_point",
         backend="warp",
         array_type="warp",
+        device="warp-cpu",
     )
     observation, _ = env.reset(seed=0)
     observation, reward, terminated, truncated, info = env.step(np.zeros((2, 9)))
@@ -191,7 +194,7 @@ def test_jax_outputs_equal_the_numpy_outputs_and_take_jax_actions(numpy_run, nam
 def test_torch_task_code_gives_the_numpy_results_as_torch_tensors(numpy_run, name):
     torch = pytest.importorskip("torch", reason="torch is optional: pip install torch==2.13.0")
     actions, expected = numpy_run
-    env = manipulation_batch.load(name, NUM_ENVS, seed=3, device="cpu", array_type="torch")
+    env = manipulation_batch.load(name, NUM_ENVS, seed=3, device="warp-cpu", array_type="torch")
     assert env.physics.xp.__name__.endswith("torch")  # the hooks ran on torch tensors
     steps = [env.reset()] + [env.step(torch.as_tensor(action)) for action in actions]
     # The same float32 physics; torch's and NumPy's float32 sin, cos, exp and norms may

@@ -38,7 +38,7 @@ def test_batch_own_task_page_runs_from_the_own_task_pages_task(tmp_path, monkeyp
     # The goal site's MJCFVariator runs per world: each of the 16 worlds has its own goal.
     assert "(16, 3)" in printed
     assert "16 different goals" in printed
-    assert "float32 int8" in printed
+    assert "float64 int8" in printed
     assert "(8, 3) (8,)" in printed
     # The equivalence check: the batch and the float32-rounded CPU leave the bound at the
     # same value, the puck's spin as it lands in the first step.

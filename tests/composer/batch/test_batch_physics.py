@@ -17,7 +17,7 @@ NUM_ENVS = 3
 
 @pytest.fixture(scope="module")
 def env():
-    env = manipulation_batch.load("reach_site_features", NUM_ENVS, seed=5)
+    env = manipulation_batch.load("reach_site_features", NUM_ENVS, seed=5, device="warp-cpu")
     env.reset()
     return env
 

@@ -21,7 +21,7 @@ CONTROL_STEPS = 4
 @pytest.fixture
 def batch_env():
     """A fresh batch: its worlds' generators as seeded, like fresh CPU environments."""
-    env = batch.BatchEnvironment(PushPuck(), len(SEEDS), random_states=SEEDS, device="cpu")
+    env = batch.BatchEnvironment(PushPuck(), len(SEEDS), random_states=SEEDS, device="warp-cpu")
     yield env
     env.close()
 
@@ -89,7 +89,9 @@ class _WalledPushPuck(PushPuck):
 
 
 def test_a_welded_body_moved_by_an_mjcf_variator_is_placed_per_world_as_on_the_cpu():
-    env = batch.BatchEnvironment(_WalledPushPuck(), len(SEEDS), random_states=SEEDS, device="cpu")
+    env = batch.BatchEnvironment(
+        _WalledPushPuck(), len(SEEDS), random_states=SEEDS, device="warp-cpu"
+    )
     cpu_envs = [composer.Environment(_WalledPushPuck(), random_state=seed) for seed in SEEDS]
     assert {"body_pos", "body_quat"} <= set(env.physics.batched_model_fields)
     for _ in range(RESETS):

@@ -138,7 +138,7 @@ def test_the_door_batches_as_written_and_its_worlds_draw_their_own_targets():
     env = batch.BatchEnvironment(
         make_task(),
         NUM_ENVS,
-        device="cpu",
+        device="warp-cpu",
         random_state=0,
         strip_singleton_obs_buffer_dim=True,
     )

@@ -22,7 +22,7 @@ def _zeros(env):
 
 def test_the_parts_of_each_step_add_up_to_its_wall_time():
     # Episodes of 0.2 s (5 steps): the timed steps start episodes too.
-    env = manipulation_batch.load(NAME, NUM_ENVS, device="cpu", seed=0, time_limit=0.2)
+    env = manipulation_batch.load(NAME, NUM_ENVS, device="warp-cpu", seed=0, time_limit=0.2)
     action = _zeros(env)
     env.reset()
     env.step(action)
@@ -57,7 +57,7 @@ def test_the_parts_of_each_step_add_up_to_its_wall_time():
 
 
 def test_a_step_clock_must_be_a_step_clock():
-    env = manipulation_batch.load(NAME, 1, device="cpu", seed=0)
+    env = manipulation_batch.load(NAME, 1, device="warp-cpu", seed=0)
     with pytest.raises(ValueError, match="step_clock: expected a StepClock or None"):
         env.step_clock = "fast"
     env.close()
@@ -72,7 +72,7 @@ def test_steps_copy_to_the_host_only_the_refills_counter_read(name):
     env = manipulation_batch.load(
         name,
         NUM_ENVS,
-        device="cpu",
+        device="warp-cpu",
         seed=0,
         time_limit=0.2,
         array_type="torch",

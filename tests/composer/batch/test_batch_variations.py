@@ -110,7 +110,7 @@ def test_a_variation_on_a_release_the_table_is_not_proven_on_is_proven_at_constr
     monkeypatch.setenv("XDG_CACHE_HOME", str(tmp_path))  # no cached proof either
     with warnings.catch_warnings():
         warnings.simplefilter("error")
-        env = batch.BatchEnvironment(_tinted_reach(), 2, device="cpu")
+        env = batch.BatchEnvironment(_tinted_reach(), 2, device="warp-cpu")
     env.close()
     cached = tmp_path / "mujoco-composer" / "patch_proof" / f"mujoco-{mujoco.__version__}.json"
     proofs = json.loads(cached.read_text(encoding="utf-8"))["contexts"]
@@ -166,7 +166,7 @@ def test_a_variation_of_a_field_that_mujoco_warp_shares_between_worlds_is_refuse
         match=r"model field 'site_size' \(from <site name='target'> attribute 'size'\) varies "
         r"per world, but MuJoCo Warp shares it",
     ):
-        batch.BatchEnvironment(task, 2, device="cpu")
+        batch.BatchEnvironment(task, 2, device="warp-cpu")
 
 
 @pytest.mark.warp
@@ -177,7 +177,7 @@ def test_a_variation_of_a_field_the_device_lacks_keeps_the_cpu_draws_with_proces
         factory(),
         len(SEEDS),
         random_states=SEEDS,
-        device="cpu",
+        device="warp-cpu",
         task_factory=factory,
         state_workers=2,
         state_processes=True,
@@ -207,7 +207,7 @@ def _varied_values(physics, task) -> dict:
 
 @pytest.mark.warp
 def test_each_world_draws_the_cpu_environments_values_at_every_reset():
-    batch_env = manipulation_batch.load(NAME, len(SEEDS), random_states=SEEDS, device="cpu")
+    batch_env = manipulation_batch.load(NAME, len(SEEDS), random_states=SEEDS, device="warp-cpu")
     cpu_envs = [manipulation.load(NAME, seed=seed) for seed in SEEDS]
     plain = manipulation.load("lift_brick_features", seed=0)
     plain.reset()
@@ -243,7 +243,7 @@ def test_each_world_draws_the_cpu_environments_values_at_every_reset():
 
 @pytest.mark.warp
 def test_worlds_match_their_cpu_environments_over_several_randomised_episodes():
-    batch_env = manipulation_batch.load(NAME, len(SEEDS), random_states=SEEDS, device="cpu")
+    batch_env = manipulation_batch.load(NAME, len(SEEDS), random_states=SEEDS, device="warp-cpu")
     cpu_envs = [manipulation.load(NAME, seed=seed) for seed in SEEDS]
     kv = _max_servo_gain(cpu_envs[0])
     n_sub_steps = cpu_envs[0].task.physics_steps_per_control_step
@@ -279,7 +279,7 @@ class _GearedLift(Lift):
 @pytest.mark.warp
 def test_derived_constants_follow_each_worlds_draw_and_change_only_in_the_reset_worlds():
     batch_env = batch.BatchEnvironment(
-        _GearedLift(), len(SEEDS), random_states=SEEDS, device="cpu", time_limit=1.0
+        _GearedLift(), len(SEEDS), random_states=SEEDS, device="warp-cpu", time_limit=1.0
     )
     cpu_envs = [composer.Environment(_GearedLift(), random_state=seed) for seed in SEEDS]
     compiled_acc0 = mjcf.Physics.from_mjcf_model(

@@ -43,7 +43,7 @@ def test_a_batch_on_the_cpu_device_prints_no_cuda_driver_warning(no_cuda_driver)
         from manipulation.tasks import observation_settings
         from manipulation.tasks.reach import Reach
 
-        env = BatchEnvironment(Reach(observation_settings.FEATURES), 2, device="cpu")
+        env = BatchEnvironment(Reach(observation_settings.FEATURES), 2, device="warp-cpu")
         env.reset()
         print("built and reset")
         """

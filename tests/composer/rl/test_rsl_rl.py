@@ -20,7 +20,7 @@ STEPS = 5
 
 _OPTIONS = dict(
     seed=3,
-    device="cpu",
+    device="warp-cpu",
     array_type="torch",
     autoreset_mode="same_step",
     time_limit=TIME_LIMIT,
