@@ -1,0 +1,273 @@
+"""The CPU batch (`mujoco.batch`) against what a CPU user has otherwise, as ratios from one run.
+
+For each task of `--tasks` (default reach_site_features, lift_brick_features) and each N of
+`--sizes` (default 64, 256), in env-steps per second (one world's control step each), each
+run over the task's own 10 s episodes with its initial-state producer (every world starts
+at least one episode inside the timed window):
+
+  loop: a plain loop of `composer.Environment`s (`manipulation.load`), reset at LAST;
+  raw: `mujoco.batch.Batch` of the task's model, N worlds on the same threads, stepped as
+    the batch steps (controls written through `bind("ctrl")`, `n_sub_steps` physics steps
+    ending at the velocity stage): the physics alone, the batch's ceiling;
+  batch: `manipulation.batch.load(task, N, device="cpu")`, and batch / loop, batch / raw;
+  threaded: `composer.gym.ThreadedVectorEnv` at its best N of 2, 4, 8, and batch / it;
+  async: Gymnasium's `AsyncVectorEnv` (one process per sub-environment) at its best N of
+    2 and 4, and batch / it (skipped with --no-async).
+
+Then, from a run of the batch with its `StepClock`: the caller's serial CPU per world-step
+(everything outside `Batch.step`, producers included) as a share of one world's physics
+step on one thread, and the speed-up over one core that this serial share leaves possible
+at 16 and 64 cores (Amdahl: (s + p) / (s + p / cores)); the bytes per world (resident
+memory of a 4,096-world batch, over 4,096), and a few steps of 4,096 lift worlds.
+
+Throughputs are medians of `--repeats` trials; in each trial every row is measured in
+turn, so that load from other processes spreads over all rows; ratios are of the medians.
+The number of cores and the 1-minute load average are printed with the table.
+
+Usage: python benchmarks/cpu_batch.py [--tasks T1,T2] [--sizes 64,256] [--repeats 3]
+    [--no-async] [--no-large]
+"""
+
+import argparse
+import os
+import pathlib
+import statistics
+import sys
+import time
+
+# `import manipulation` finds the package rather than benchmarks/manipulation.py.
+_HERE = pathlib.Path(__file__).resolve().parent
+sys.path = [entry for entry in sys.path if pathlib.Path(entry or ".").resolve() != _HERE]
+
+import gymnasium  # noqa: E402
+import mujoco  # noqa: E402
+import numpy as np  # noqa: E402
+
+import manipulation  # noqa: E402
+from composer.batch.step_clock import StepClock  # noqa: E402
+from composer.gym import GymnasiumEnv, ThreadedVectorEnv  # noqa: E402
+from manipulation import batch as manipulation_batch  # noqa: E402
+
+_VEL = int(mujoco.mjtStage.mjSTAGE_VEL)
+_LOOP_ENVS = 4
+
+
+def _cores() -> int:
+    return len(os.sched_getaffinity(0))
+
+
+def _episode_steps(task: str) -> int:
+    env = manipulation.load(task)
+    return int(round(10.0 / env.control_timestep()))
+
+
+def _actions(spec, count: int, n: int, seed: int) -> np.ndarray:
+    rng = np.random.RandomState(seed)
+    return rng.uniform(spec.minimum, spec.maximum, (count, n, *spec.shape))
+
+
+def _loop_rate(task: str, steps: int) -> float:
+    envs = [manipulation.load(task, seed=i) for i in range(_LOOP_ENVS)]
+    actions = _actions(envs[0].action_spec(), steps, _LOOP_ENVS, 0)
+    for env in envs:
+        env.reset()
+    start = time.perf_counter()
+    for t in range(steps):
+        for env, action in zip(envs, actions[t]):
+            if env.step(action).last():
+                env.reset()
+    return steps * _LOOP_ENVS / (time.perf_counter() - start)
+
+
+def _raw_rate(task: str, n: int, steps: int) -> float:
+    from mujoco import batch as mujoco_batch
+
+    env = manipulation.load(task)
+    env.reset()
+    model, n_sub = env.physics.model.ptr, env.task.physics_steps_per_control_step
+    worlds = mujoco_batch.Batch(model, n, nthread=_cores(), persistent=True)
+    worlds.reset()
+    ctrl = worlds.bind("ctrl")
+    actions = _actions(env.action_spec(), steps, n, 1)
+    start = time.perf_counter()
+    for t in range(steps):
+        ctrl[...] = actions[t]
+        worlds.step(nstep=n_sub, stage=_VEL)
+    return steps * n / (time.perf_counter() - start)
+
+
+def _batch_env(task: str, n: int):
+    return manipulation_batch.load(task, n, seed=0, device="cpu")
+
+
+def _batch_rate(env, steps: int, clock: StepClock | None = None) -> float:
+    actions = _actions(env.action_spec(), steps, env.num_envs, 2)
+    env.reset()
+    env.step_clock = clock
+    start = time.perf_counter()
+    for t in range(steps):
+        env.step(actions[t])
+    rate = steps * env.num_envs / (time.perf_counter() - start)
+    env.step_clock = None
+    return rate
+
+
+def _vector_rate(envs, steps: int) -> float:
+    envs.reset(seed=0)
+    actions = [envs.action_space.sample() for _ in range(8)]
+    start = time.perf_counter()
+    for t in range(steps):
+        envs.step(actions[t % 8])
+    return steps * envs.num_envs / (time.perf_counter() - start)
+
+
+def _make(task: str):
+    return GymnasiumEnv(manipulation.load(task))
+
+
+def _best_vector_rate(task: str, kind: str, sizes, steps: int, repeats: int) -> tuple[int, float]:
+    import functools
+
+    best = (0, 0.0)
+    make = functools.partial(_make, task)
+    for n in sizes:
+        if kind == "threaded":
+            envs = ThreadedVectorEnv([make] * n)
+        else:
+            envs = gymnasium.vector.AsyncVectorEnv([make] * n, context="forkserver")
+        rate = statistics.median(_vector_rate(envs, steps) for _ in range(repeats))
+        envs.close()
+        best = max(best, (n, rate), key=lambda pair: pair[1])
+    return best
+
+
+def _single_thread_physics_us(task: str, steps: int = 200) -> float:
+    """One world's physics per control step on one thread, in microseconds."""
+    from mujoco import batch as mujoco_batch
+
+    env = manipulation.load(task)
+    model, n_sub = env.physics.model.ptr, env.task.physics_steps_per_control_step
+    worlds = mujoco_batch.Batch(model, 16, nthread=1, persistent=True)
+    worlds.reset()
+    start = time.perf_counter()
+    for _ in range(steps):
+        worlds.step(nstep=n_sub, stage=_VEL)
+    return (time.perf_counter() - start) / (steps * 16) * 1e6
+
+
+def _resident_bytes() -> int:
+    with open("/proc/self/statm") as statm:
+        return int(statm.read().split()[1]) * os.sysconf("SC_PAGE_SIZE")
+
+
+def _table(header, rows) -> None:
+    widths = [max(len(str(c)) for c in column) for column in zip(header, *rows)]
+    for row in (header, *rows):
+        print("  ".join(str(c).rjust(w) for c, w in zip(row, widths)))
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    parser.add_argument("--tasks", default="reach_site_features,lift_brick_features")
+    parser.add_argument("--sizes", default="64,256")
+    parser.add_argument("--repeats", type=int, default=3)
+    parser.add_argument("--no-async", action="store_true")
+    parser.add_argument("--no-large", action="store_true")
+    args = parser.parse_args()
+    sizes = [int(s) for s in args.sizes.split(",")]
+    cores = _cores()
+    print(
+        f"cores: {cores}, load average (1 min): {os.getloadavg()[0]:.2f}, "
+        f"mujoco {mujoco.__version__}"
+    )
+    rows, serial_rows = [], []
+    for task in args.tasks.split(","):
+        steps = _episode_steps(task) + 10
+        envs = {n: _batch_env(task, n) for n in sizes}
+        loop, raw, batched = [], {n: [] for n in sizes}, {n: [] for n in sizes}
+        for _ in range(args.repeats):
+            loop.append(_loop_rate(task, steps))
+            for n in sizes:
+                raw[n].append(_raw_rate(task, n, steps))
+                batched[n].append(_batch_rate(envs[n], steps))
+        vector_steps = max(40, steps // 4)
+        threaded = _best_vector_rate(task, "threaded", (2, 4, 8), vector_steps, args.repeats)
+        asynchronous = (
+            (0, float("nan"))
+            if args.no_async
+            else _best_vector_rate(task, "async", (2, 4), vector_steps, args.repeats)
+        )
+        loop_rate = statistics.median(loop)
+        for n in sizes:
+            raw_rate, batch_rate = statistics.median(raw[n]), statistics.median(batched[n])
+            rows.append(
+                (
+                    task,
+                    n,
+                    f"{loop_rate:,.0f}",
+                    f"{raw_rate:,.0f}",
+                    f"{batch_rate:,.0f}",
+                    f"{batch_rate / loop_rate:.2f}x",
+                    f"{batch_rate / raw_rate:.2f}x",
+                    f"{threaded[1]:,.0f} (N={threaded[0]})",
+                    f"{batch_rate / threaded[1]:.2f}x",
+                    f"{asynchronous[1]:,.0f} (N={asynchronous[0]})",
+                    f"{batch_rate / asynchronous[1]:.2f}x",
+                )
+            )
+            clock = StepClock(envs[n].synchronize)
+            _batch_rate(envs[n], steps, clock)
+            total = sum(clock.seconds.values())
+            serial_us = (total - clock.seconds["physics"]) / (clock.steps * n) * 1e6
+            physics_us = _single_thread_physics_us(task)
+            share = serial_us / physics_us
+            bound = [(1 + share) / (share + 1 / c) for c in (16, 64)]
+            serial_rows.append(
+                (
+                    task,
+                    n,
+                    f"{serial_us:.2f}",
+                    f"{physics_us:.1f}",
+                    f"{100 * share:.2f}%",
+                    f"{bound[0]:.1f}x",
+                    f"{bound[1]:.1f}x",
+                )
+            )
+        for env in envs.values():
+            env.close()
+    print("\nenv-steps/s, medians of", args.repeats, "trials")
+    _table(
+        (
+            "task",
+            "N",
+            "loop",
+            "raw",
+            "batch",
+            "/loop",
+            "/raw",
+            "threaded",
+            "/threaded",
+            "async",
+            "/async",
+        ),
+        rows,
+    )
+    print("\nthe caller's serial CPU per world-step (outside Batch.step), us")
+    _table(
+        ("task", "N", "serial", "1-thread physics", "share", "bound 16", "bound 64"), serial_rows
+    )
+    if not args.no_large:
+        before = _resident_bytes()
+        env = _batch_env("lift_brick_features", 4096)
+        env.reset()
+        per_world = (_resident_bytes() - before) / 4096
+        rate = _batch_rate(env, 5)
+        env.close()
+        print(
+            f"\n4,096 lift_brick_features worlds: {per_world / 1024:.1f} KiB per world "
+            f"(resident), {rate:,.0f} env-steps/s over 5 steps"
+        )
+
+
+if __name__ == "__main__":
+    main()
