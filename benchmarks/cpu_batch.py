@@ -198,6 +198,7 @@ def main() -> None:
             else _best_vector_rate(task, "async", (2, 4), vector_steps, args.repeats)
         )
         loop_rate = statistics.median(loop)
+        physics_us = _single_thread_physics_us(task)
         for n in sizes:
             raw_rate, batch_rate = statistics.median(raw[n]), statistics.median(batched[n])
             rows.append(
@@ -219,7 +220,6 @@ def main() -> None:
             _batch_rate(envs[n], steps, clock)
             total = sum(clock.seconds.values())
             serial_us = (total - clock.seconds["physics"]) / (clock.steps * n) * 1e6
-            physics_us = _single_thread_physics_us(task)
             share = serial_us / physics_us
             bound = [(1 + share) / (share + 1 / c) for c in (16, 64)]
             serial_rows.append(

@@ -19,7 +19,14 @@ from mujoco_physics import field_layout
 if TYPE_CHECKING:
     from composer.batch.physics import BatchPhysics
 
-__all__ = ["BatchBinding", "FieldStorage", "FieldView", "NamedViews", "StructViews"]
+__all__ = [
+    "BatchBinding",
+    "BatchFields",
+    "FieldStorage",
+    "FieldView",
+    "NamedViews",
+    "StructViews",
+]
 
 
 class FieldStorage(NamedTuple):
@@ -282,3 +289,47 @@ class StructViews:
         if name.startswith("__"):
             raise AttributeError(name)
         return self._physics.field(self._struct, name).read()
+
+
+class BatchFields:
+    """What every batch physics gives alike: `field`, `bind`, and the `data`, `model` and
+    `named` views, all over the subclass's `field_storage(struct, name)`.
+
+    A subclass sets `mj_model`, `host` and `num_envs` and calls `_make_views()`.
+    """
+
+    def _make_views(self) -> None:
+        self._fields: dict[tuple[str, str], FieldView] = {}
+        self.data = StructViews(self, field_layout.DATA)
+        self.model = StructViews(self, field_layout.MODEL)
+        self.named = NamedViews(self)
+
+    def field(self, struct: str, name: str) -> FieldView:
+        """The `FieldView` for MjModel (`struct='model'`) or MjData field `name`.
+
+        Raises:
+          AttributeError: for a name that is not an MjModel/MjData array field.
+        """
+        key = (struct, name)
+        field = self._fields.get(key)
+        if field is None:
+            host = self.mj_model if struct == field_layout.MODEL else self.host.data.ptr
+            value = getattr(host, name, None)
+            # A per-world scalar such as data.time is a (num_envs,) array.
+            scalar = struct == field_layout.DATA and isinstance(value, float)
+            if not (isinstance(value, np.ndarray) or scalar):
+                raise AttributeError(f"MuJoCo has no array {struct} field {name!r}")
+            field = self._fields[key] = FieldView(self, struct, name)
+        return field
+
+    def bind(self, elements) -> BatchBinding:
+        """The batched fields of an MJCF element or a list of them (see `BatchBinding`).
+
+        Returns:
+          A `BatchBinding` whose reads have a leading `num_envs` axis.
+
+        Raises:
+          ValueError: for elements that are not part of the compiled model, as
+            `mjcf.Physics.bind` raises.
+        """
+        return BatchBinding(self, elements)

@@ -316,22 +316,16 @@ class BatchEnvironment:
         CPU batch, `BatchPhysics` on MuJoCo Warp), on which the `BatchTask`'s
         `after_compile` has run."""
         if self._device.on_warp:
-            physics = BatchPhysics(
-                host.physics,
-                self.num_envs,
-                arrays=self._arrays,
-                batched_model_fields=fields.device,
-                nconmax=nconmax,
-                njmax=njmax,
-            )
+            physics_type, options = BatchPhysics, {"nconmax": nconmax, "njmax": njmax}
         else:
-            physics = MujocoBatchPhysics(
-                host.physics,
-                self.num_envs,
-                arrays=self._arrays,
-                batched_model_fields=fields.device,
-                threads=threads,
-            )
+            physics_type, options = MujocoBatchPhysics, {"threads": threads}
+        physics = physics_type(
+            host.physics,
+            self.num_envs,
+            arrays=self._arrays,
+            batched_model_fields=fields.device,
+            **options,
+        )
         self._batch_task.after_compile(physics)
         return physics
 

@@ -17,6 +17,7 @@ quantities are not recomputed after a write: `forward(mask)` does that for the w
 mask and no other.
 """
 
+import os
 from collections.abc import Sequence
 from typing import NamedTuple
 
@@ -25,13 +26,7 @@ import numpy as np
 
 import mjcf
 from composer.batch.arrays import ArrayBridge
-from composer.batch.bindings import (
-    BatchBinding,
-    FieldStorage,
-    FieldView,
-    NamedViews,
-    StructViews,
-)
+from composer.batch.bindings import BatchFields, FieldStorage
 from mujoco_physics import field_layout
 
 __all__ = ["MujocoBatchPhysics", "batch_model_fields", "require_mujoco_batch"]
@@ -112,7 +107,7 @@ class ContactWatch:
         return self.worlds
 
 
-class MujocoBatchPhysics:
+class MujocoBatchPhysics(BatchFields):
     """`num_envs` worlds of the model compiled into `host`, on `mujoco.batch` C threads.
 
     Args:
@@ -178,55 +173,35 @@ class MujocoBatchPhysics:
             self.batch.expand(name)
         self._disable_flags = None  # expanded at the first forward without actuation
         self._contact_data: mujoco.MjData | None = None
-        self._fields: dict[tuple[str, str], FieldView] = {}
         initial = np.empty(self.state_size)
         mujoco.mj_getState(self.mj_model, host.data.ptr, initial, _STATE_SPEC)
         self.batch.reset(stage=_NO_STAGE)
         self.batch.state[...] = initial
         self.batch.forward()
-        self.data = StructViews(self, field_layout.DATA)
-        self.model = StructViews(self, field_layout.MODEL)
-        self.named = NamedViews(self)
+        self._make_views()
 
     # Fields.
-
-    def field(self, struct: str, name: str) -> FieldView:
-        """The `FieldView` for MjModel (`struct='model'`) or MjData field `name`."""
-        key = (struct, name)
-        field = self._fields.get(key)
-        if field is None:
-            field = self._fields[key] = FieldView(self, struct, name)
-        return field
 
     def field_storage(self, struct: str, name: str) -> FieldStorage:
         """The `FieldStorage` of field `name`: the batch's rows of it, or for a shared
         model field the compiled model's array.
 
         Raises:
-          AttributeError: for a name that is not an MjModel/MjData array field, or a data
-            field `mujoco.batch` cannot bind (the arena's contacts and constraints).
+          AttributeError: for a data field `mujoco.batch` cannot bind (the arena's contacts
+            and constraints).
         """
         if struct == field_layout.MODEL:
-            value = getattr(self.mj_model, name, None)
-            if not isinstance(value, np.ndarray):
-                raise AttributeError(f"MuJoCo has no array model field {name!r}")
             if name in self.batched_model_fields:
                 rows, per_world = self.batch.expand(name), True
             else:
+                value = getattr(self.mj_model, name)
                 rows, per_world = value.reshape((1, *value.shape)), False
         else:
-            value = getattr(self.host.data.ptr, name, None)
-            if not isinstance(value, (np.ndarray, float)):
-                raise AttributeError(f"MuJoCo has no array data field {name!r}")
             try:
                 rows, per_world = self.batch.bind(name), True
             except ValueError as error:
                 raise AttributeError(f"data field {name!r}: {error}") from None
         return FieldStorage(rows, per_world, rows.dtype == self.float_dtype)
-
-    def bind(self, elements) -> BatchBinding:
-        """The batched fields of an MJCF element or a list of them (see `BatchBinding`)."""
-        return BatchBinding(self, elements)
 
     def contact_counts(self) -> np.ndarray:
         """int (num_envs,): each world's number of contacts in its last collision pass."""
@@ -319,8 +294,6 @@ def _ids(mask) -> np.ndarray | None:
 
 
 def _thread_count(threads: int | None) -> int:
-    import os
-
     if threads is None:
         try:
             return max(1, len(os.sched_getaffinity(0)))

@@ -26,13 +26,7 @@ import numpy as np
 import mjcf
 from composer.batch import _warp, kernels
 from composer.batch.arrays import ArrayBridge, array_library, row_items
-from composer.batch.bindings import (
-    BatchBinding,
-    FieldStorage,
-    FieldView,
-    NamedViews,
-    StructViews,
-)
+from composer.batch.bindings import BatchFields, FieldStorage
 from mujoco_physics import field_layout
 
 __all__ = ["BatchPhysics", "ContactWatch", "device_model_fields"]
@@ -88,7 +82,7 @@ class ContactWatch:
         return self._view
 
 
-class BatchPhysics:
+class BatchPhysics(BatchFields):
     """`num_envs` worlds of the model compiled into `host`, on a Warp device.
 
     Args:
@@ -156,7 +150,6 @@ class BatchPhysics:
             )
             self.state_size = mujoco.mj_stateSize(self.mj_model, _STATE_SPEC)
             self._states = warp.zeros((self.num_envs, self.state_size), dtype=warp.float32)
-        self._fields: dict[tuple[str, str], FieldView] = {}
         # forward(mask) copies the chosen worlds back: on CUDA with these launches, recorded
         # once (and so capturable); on Warp's CPU device, where the arrays are host memory,
         # with NumPy, each world's row one item: reach's 119 arrays (18 kB a world) copy in
@@ -179,25 +172,9 @@ class BatchPhysics:
         self._static_geoms = self._moving_static_geoms()
         self._saved_sensordata = None
         self._graphs: dict[Any, Any] = {}
-        self.data = StructViews(self, field_layout.DATA)
-        self.model = StructViews(self, field_layout.MODEL)
-        self.named = NamedViews(self)
+        self._make_views()
 
     # Fields.
-
-    def field(self, struct: str, name: str) -> FieldView:
-        """The `FieldView` for MjModel (`struct='model'`) or MjData field `name`."""
-        key = (struct, name)
-        field = self._fields.get(key)
-        if field is None:
-            host = self.mj_model if struct == field_layout.MODEL else self.host.data.ptr
-            value = getattr(host, name, None)
-            # A per-world scalar such as data.time is a (num_envs,) array.
-            scalar = struct == field_layout.DATA and isinstance(value, float)
-            if not (isinstance(value, np.ndarray) or scalar):
-                raise AttributeError(f"MuJoCo has no array {struct} field {name!r}")
-            field = self._fields[key] = FieldView(self, struct, name)
-        return field
 
     def field_storage(self, struct: str, name: str) -> FieldStorage:
         """The `FieldStorage` of field `name`: a view of MuJoCo Warp's own array.
@@ -219,18 +196,6 @@ class BatchPhysics:
         view = self.arrays.view(device_array, (rows, *np.shape(getattr(host, name))))
         scalar = getattr(device_array.dtype, "_wp_scalar_type_", device_array.dtype)
         return FieldStorage(view, per_world, scalar is self._wp.float32, device_array)
-
-    def bind(self, elements) -> BatchBinding:
-        """The batched fields of an MJCF element or a list of them (see `BatchBinding`).
-
-        Returns:
-          A `BatchBinding` whose reads have a leading `num_envs` axis.
-
-        Raises:
-          ValueError: for elements that are not part of the compiled model, as
-            `mjcf.Physics.bind` raises.
-        """
-        return BatchBinding(self, elements)
 
     def contact_watch(self, first_geoms: np.ndarray, second_geoms: np.ndarray) -> ContactWatch:
         """A `ContactWatch` for contacts between a geom of `first_geoms` and one of
