@@ -147,6 +147,9 @@ def test_processes_and_threads_make_the_same_initial_states():
             for key, value in a.observation.items():
                 np.testing.assert_array_equal(b.observation[key], value, err_msg=key)
         assert processes.initial_state_stats().reused == 0
+        # How far ahead the producers have drawn between resets depends on when their jobs
+        # finish; a reset asks for each world's next slots_per_world episodes in both.
+        threads.reset(), processes.reset()
         # Worker processes send generator states back; each world's generator has drawn
         # the same episodes as with threads.
         for a, b in zip(threads.random_states, processes.random_states):
