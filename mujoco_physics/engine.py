@@ -46,6 +46,7 @@ __all__ = [
     "Pose",
     "TextOverlay",
     "action_spec",
+    "invalid_state_message",
 ]
 
 # Message formats, under the names dm_control's tests read them from.
@@ -105,13 +106,21 @@ class _Simulation:
     def report_warnings(self, before: bytes) -> None:
         """Raises PhysicsError (or logs) for warning counters that grew since `before`."""
         previous = np.frombuffer(before, dtype=self.warnings.dtype)
-        raised = [name for name, grew in zip(_WARNING_NAMES, self.warnings > previous) if grew]
-        if not raised:
+        message = invalid_state_message(previous, self.warnings)
+        if message is None:
             return
-        message = _INVALID_PHYSICS_STATE.format(warning_names=", ".join(raised))
         if self.raise_on_warnings:
             raise PhysicsError(message)
         logging.warning(message)
+
+
+def invalid_state_message(before: np.ndarray, after: np.ndarray) -> str | None:
+    """The `PhysicsError` message for the MuJoCo warning counters (`MjData.warning.number`)
+    that grew from `before` to `after`, or None when none grew."""
+    raised = [name for name, grew in zip(_WARNING_NAMES, after > before) if grew]
+    if not raised:
+        return None
+    return _INVALID_PHYSICS_STATE.format(warning_names=", ".join(raised))
 
 
 class _ResetContext:

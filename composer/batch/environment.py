@@ -1,5 +1,6 @@
 """BatchEnvironment: `num_envs` copies of a composer task stepped together on MuJoCo Warp."""
 
+import logging
 import math
 import numbers
 from collections.abc import Callable, Sequence
@@ -182,6 +183,12 @@ class BatchEnvironment:
         per step); default: on Warp's CPU device only, where the read costs no copy.
       namespace: the array namespace of task code, "numpy" or "torch" (default: see
         `composer.batch.arrays`).
+      raise_exception_on_physics_error: on the CPU batch, a world whose state becomes
+        invalid in a step (NaN, infinite or huge qpos, qvel or qacc, which MuJoCo answers
+        by resetting it) makes `step` raise `mjcf.PhysicsError` naming the world when True,
+        as `composer.Environment` does; when False that world's episode ends there, as
+        `composer.Environment`'s does (LAST, reward 0, discount 0, a logged warning naming
+        the world) and every other world goes on. MuJoCo Warp does not report such worlds.
 
     Raises:
       ValueError: for a bad argument, named in the message.
@@ -217,6 +224,7 @@ class BatchEnvironment:
         check_action_values: bool | None = None,
         namespace: str | None = None,
         threads: int | None = None,
+        raise_exception_on_physics_error: bool = True,
     ):
         self.num_envs = argument_checks.integer(num_envs=num_envs)
         _check_arguments(
@@ -246,6 +254,7 @@ class BatchEnvironment:
             host, fields, nconmax=nconmax, njmax=njmax, threads=threads
         )
         self._set_step_rules(host.physics, autoreset_mode, check_action_values)
+        self._raise_exception_on_physics_error = bool(raise_exception_on_physics_error)
         self._observables = self._batch_observables(strip_singleton_obs_buffer_dim)
         self._step_limit = control_step_limit(
             float(time_limit), self._batch_task.task.physics_timestep, self._n_sub_steps
@@ -614,6 +623,9 @@ class BatchEnvironment:
         Raises:
           ValueError: for an action of the wrong shape or with NaN or infinity; nothing is
             stepped.
+          mjcf.PhysicsError: on the CPU batch, when a world's state became invalid and
+            `raise_exception_on_physics_error` is True; every world has been stepped (the
+            invalid one reset by MuJoCo), and the step is not counted: call `reset`.
         """
         self._arrays.use_stream()
         clock = self._clock
@@ -635,6 +647,7 @@ class BatchEnvironment:
         clock.lap("physics")
         autoreset = self._autoreset
         restarting = autoreset.resets_before_step(self._ended)
+        diverged = self._diverged_worlds(restarting) if physics.last_divergences else None
         if autoreset is Autoreset.NEXT_STEP:
             # These worlds were stepped with the others; their reset overwrites that step.
             self._start_episodes(restarting)
@@ -652,6 +665,10 @@ class BatchEnvironment:
             if self._default_termination
             else xp.astype(task.should_terminate_episode(physics), xp.bool, copy=False)
         )
+        if diverged is not None:
+            reward = xp.where(diverged, self._zero, reward)
+            discount = xp.where(diverged, self._zero, discount)
+            terminated = diverged if terminated is None else terminated | diverged
         clock.lap("task")
         steps = xp.where(restarting, 0, self._steps + 1)
         ended = steps >= self._step_limit
@@ -686,6 +703,26 @@ class BatchEnvironment:
         time_step = self._time_step(step_type, reward, discount, observation)
         clock.lap("hand_out")
         return time_step
+
+    def _diverged_worlds(self, restarting) -> np.ndarray | None:
+        """The worlds whose state became invalid in the last physics step and whose episode
+        it ends (a world restarting at this step is overwritten by its reset), as a bool
+        (num_envs,) mask, or None for none.
+
+        Raises:
+          mjcf.PhysicsError: naming those worlds, with `raise_exception_on_physics_error`.
+        """
+        restarting = np.asarray(restarting, dtype=bool)
+        found = [d for d in self._physics.last_divergences if not restarting[d.world]]
+        if not found:
+            return None
+        report = "; ".join(f"world {d.world}: {d.message}" for d in found)
+        if self._raise_exception_on_physics_error:
+            raise mjcf.PhysicsError(report)
+        logging.warning("Physics error, ending the episode of %s", report)
+        diverged = np.zeros(self.num_envs, dtype=bool)
+        diverged[[d.world for d in found]] = True
+        return diverged
 
     def close(self) -> None:
         """Stops the initial-state producers."""

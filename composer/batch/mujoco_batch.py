@@ -27,9 +27,9 @@ import numpy as np
 import mjcf
 from composer.batch.arrays import ArrayBridge
 from composer.batch.bindings import BatchFields, FieldStorage
-from mujoco_physics import field_layout
+from mujoco_physics import engine, field_layout
 
-__all__ = ["MujocoBatchPhysics", "batch_model_fields", "require_mujoco_batch"]
+__all__ = ["Divergence", "MujocoBatchPhysics", "batch_model_fields", "require_mujoco_batch"]
 
 _STATE_SPEC = mujoco.mjtState.mjSTATE_INTEGRATION
 _VEL_STAGE = int(mujoco.mjtStage.mjSTAGE_VEL)
@@ -75,6 +75,19 @@ class Contacts(NamedTuple):
     """
 
     geom: np.ndarray
+
+
+class Divergence(NamedTuple):
+    """A world MuJoCo reset in a step because its state became invalid.
+
+    Attributes:
+      world: the world's index.
+      message: the `PhysicsError` message `mjcf.Physics` gives for it ("Physics state is
+        invalid. Warning(s) raised: mjWARN_BADQVEL", ...).
+    """
+
+    world: int
+    message: str
 
 
 class ContactWatch:
@@ -123,6 +136,10 @@ class MujocoBatchPhysics(BatchFields):
       float_dtype: float64: the dtype of every float field, as in C MuJoCo.
       state_size: the length of one world's state in `set_state` (`mjSTATE_INTEGRATION`).
       batch: the `mujoco.batch.Batch` (persistent) that holds and steps the worlds.
+      last_divergences: a `Divergence` for each world whose state became invalid in the
+        last `step` (MuJoCo reset it and stepped on, as `mj_step` does). Not seen: a world
+        with `mjDSBL_AUTORESET`, and one whose very first step of an episode, from time 0,
+        diverges in its first sub-step.
 
     Raises:
       ImportError: without `mujoco.batch` (MuJoCo below 4.0).
@@ -172,12 +189,19 @@ class MujocoBatchPhysics(BatchFields):
         for name in sorted(self.batched_model_fields):
             self.batch.expand(name)
         self._disable_flags = None  # expanded at the first forward without actuation
-        self._contact_data: mujoco.MjData | None = None
+        self._one_world: mujoco.MjData | None = None  # one world's copy, to read
+        self.last_divergences: tuple[Divergence, ...] = ()
         initial = np.empty(self.state_size)
         mujoco.mj_getState(self.mj_model, host.data.ptr, initial, _STATE_SPEC)
         self.batch.reset(stage=_NO_STAGE)
         self.batch.state[...] = initial
         self.batch.forward()
+        self._times = self.batch.bind("time")
+        self._timesteps = (
+            self.batch.expand("opt.timestep")
+            if "opt.timestep" in self.batched_model_fields
+            else self.mj_model.opt.timestep
+        )
         self._make_views()
 
     # Fields.
@@ -209,9 +233,9 @@ class MujocoBatchPhysics(BatchFields):
 
     def contacts(self, world: int) -> Contacts:
         """The `Contacts` of world `world` (a copy of its MjData's; see `ContactWatch`)."""
-        if self._contact_data is None:
-            self._contact_data = mujoco.MjData(self.mj_model)
-        data = self.batch.get_data(world, self._contact_data)
+        if self._one_world is None:
+            self._one_world = mujoco.MjData(self.mj_model)
+        data = self.batch.get_data(world, self._one_world)
         return Contacts(geom=data.contact.geom.copy())
 
     def contact_watch(self, first_geoms: np.ndarray, second_geoms: np.ndarray) -> ContactWatch:
@@ -223,8 +247,31 @@ class MujocoBatchPhysics(BatchFields):
 
     def step(self, n_sub_steps: int = 1) -> None:
         """Advances every world by `n_sub_steps` physics steps, ending with the position
-        and velocity stages of the new state computed (the legacy step chain)."""
-        self.batch.step(nstep=int(n_sub_steps), stage=_VEL_STAGE)
+        and velocity stages of the new state computed (the legacy step chain).
+
+        A world that diverged in the call is in `last_divergences` afterwards.
+        """
+        n = int(n_sub_steps)
+        before = self._times.copy()
+        self.batch.step(nstep=n, stage=_VEL_STAGE)
+        # MuJoCo resets a world whose qpos, qvel or qacc became NaN, infinite or huge
+        # (mj_resetData: time 0), and carries on from there: its clock is then behind
+        # where n steps take it. One comparison of num_envs times finds such worlds.
+        behind = self._times < before + (n - 0.5) * self._timesteps
+        self.last_divergences = (
+            tuple(self._divergence(int(world)) for world in np.flatnonzero(behind))
+            if behind.any()
+            else ()
+        )
+
+    def _divergence(self, world: int) -> Divergence:
+        """The `Divergence` of `world`, naming the warnings it raised: MuJoCo's reset
+        zeroed its counters before counting the warning that caused it."""
+        if self._one_world is None:
+            self._one_world = mujoco.MjData(self.mj_model)
+        counts = self.batch.get_data(world, self._one_world).warning.number
+        message = engine.invalid_state_message(np.zeros_like(counts), counts)
+        return Divergence(world, message or "Physics state is invalid (MuJoCo reset it)")
 
     def run_captured(self, key, work) -> None:
         """Runs `work` (nothing is captured off a GPU)."""

@@ -99,6 +99,8 @@ class BatchPhysics(BatchFields):
       xp: the array namespace of every read (NumPy on Warp's CPU device, torch on CUDA).
       float_dtype: float32, the dtype of MuJoCo Warp's float fields.
       state_size: the length of one world's state in `set_state` (`mjSTATE_INTEGRATION`).
+      last_divergences: always empty: MuJoCo Warp does not report the worlds whose state
+        became invalid (the CPU batch does, `MujocoBatchPhysics.last_divergences`).
 
     Raises:
       ValueError: for a field in `batched_model_fields` that MuJoCo Warp does not batch.
@@ -106,6 +108,7 @@ class BatchPhysics(BatchFields):
 
     float_dtype = np.dtype(np.float32)
     on_warp = True
+    last_divergences = ()
 
     def __init__(
         self,
