@@ -1,12 +1,13 @@
 #!/usr/bin/env bash
-# The vector envs on every core of a machine, in one call of about 8 minutes: the anchors'
+# The vector envs on every core of a machine, in one call of at most 9.5 minutes: the anchors'
 # table (a loop, Gymnasium's AsyncVectorEnv and SyncVectorEnv, the threaded env and the
 # lock-step ceiling) for reach_site_features at N = 1 to 64 and reach_site_vision at N = 1
 # to 16 (its frames render with EGL), then the threaded env's profile (hand-offs, waits,
 # renders in flight; the speed at N = 32 with 2 to 16 threads, and vision's at N = 16 with
 # 1 to 16 renders allowed at once), and what stepping the physics of all sub-environments
-# in one mujoco.batch call would give. Prints the tables and, when $OUT is set, writes
-# each under $OUT too.
+# in one mujoco.batch call would give, and the CPU batch (device="cpu") with raw
+# mujoco.batch at N = 64 to 4,096 on 1 to 16 C threads. Prints the tables and, when $OUT is
+# set, writes each under $OUT too.
 #
 # Usage: bash benchmarks/cores_check.sh
 # Set-up, the first that applies:
@@ -49,9 +50,9 @@ echo "cores: $(nproc), load: $(cut -d' ' -f1 /proc/loadavg)"
 $python -c "import mujoco, numpy, gymnasium
 print('mujoco', mujoco.__version__, 'numpy', numpy.__version__, 'gymnasium', gymnasium.__version__)"
 
-# Each part has its own time limit (500 s in all).
+# Each part has its own time limit (580 s in all).
 echo "== vector envs on $(nproc) cores: features"
-timeout 180 $python benchmarks/vector_env.py --tasks reach_site_features \
+timeout 150 $python benchmarks/vector_env.py --tasks reach_site_features \
   --sizes 1,4,8,16,32,64 --repeats 3 --steps 20 --no-ray 2>&1 | tee "$out/features.txt"
 echo "== vector envs on $(nproc) cores: vision"
 timeout 100 $python benchmarks/vector_env.py --tasks reach_site_vision --no-overhead \
@@ -65,3 +66,7 @@ timeout 60 $python benchmarks/vector_env_profile.py --task reach_site_vision --s
 echo "== a shard's physics in one call (mujoco.batch): parts measured, whole modelled"
 timeout 40 $python benchmarks/batch_physics_route.py --sizes 1,4,8,16,32,64 2>&1 \
   | tee "$out/batch_physics_route.txt"
+echo "== the CPU batch (mujoco.batch) on 1 to 16 C threads"
+timeout 110 $python benchmarks/cpu_batch.py --tasks reach_site_features,lift_brick_features \
+  --sizes 64,256,1024,4096 --threads 1,2,4,8,16 --scaling-only --repeats 1 \
+  --scaling-steps 5 --state-workers 8 2>&1 | tee "$out/cpu_batch_threads.txt"

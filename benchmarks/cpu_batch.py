@@ -20,12 +20,19 @@ step on one thread, and the speed-up over one core that this serial share leaves
 at 16 and 64 cores (Amdahl: (s + p) / (s + p / cores)); the bytes per world (resident
 memory of a 4,096-world batch, over 4,096), and a few steps of 4,096 lift worlds.
 
+With `--threads 1,2,4,...`, a scaling table follows (alone with `--scaling-only`): for each
+task and N, raw and the batch on each number of C threads over `--scaling-steps` control
+steps, batch / raw, and each one's speed-up over its own 1-thread figure, with
+`--state-workers` initial-state processes (several fill 4,096 worlds' slots faster)
+(benchmarks/cores_check.sh runs it on a many-core host).
+
 Throughputs are medians of `--repeats` trials; in each trial every row is measured in
 turn, so that load from other processes spreads over all rows; ratios are of the medians.
 The number of cores and the 1-minute load average are printed with the table.
 
 Usage: python benchmarks/cpu_batch.py [--tasks T1,T2] [--sizes 64,256] [--repeats 3]
-    [--no-async] [--no-large]
+    [--no-async] [--no-large] [--threads 1,2,4,8,16 [--scaling-steps 10] [--scaling-only]
+    [--state-workers 1]]
 """
 
 import argparse
@@ -79,13 +86,13 @@ def _loop_rate(task: str, steps: int) -> float:
     return steps * _LOOP_ENVS / (time.perf_counter() - start)
 
 
-def _raw_rate(task: str, n: int, steps: int) -> float:
+def _raw_rate(task: str, n: int, steps: int, threads: int | None = None) -> float:
     from mujoco import batch as mujoco_batch
 
     env = manipulation.load(task)
     env.reset()
     model, n_sub = env.physics.model.ptr, env.task.physics_steps_per_control_step
-    worlds = mujoco_batch.Batch(model, n, nthread=_cores(), persistent=True)
+    worlds = mujoco_batch.Batch(model, n, nthread=threads or _cores(), persistent=True)
     worlds.reset()
     ctrl = worlds.bind("ctrl")
     actions = _actions(env.action_spec(), steps, n, 1)
@@ -96,8 +103,16 @@ def _raw_rate(task: str, n: int, steps: int) -> float:
     return steps * n / (time.perf_counter() - start)
 
 
-def _batch_env(task: str, n: int):
-    return manipulation_batch.load(task, n, seed=0, device="cpu")
+def _batch_env(task: str, n: int, threads: int | None = None, state_workers: int = 1):
+    return manipulation_batch.load(
+        task,
+        n,
+        seed=0,
+        device="cpu",
+        threads=threads,
+        state_workers=state_workers,
+        state_processes=state_workers > 1,
+    )
 
 
 def _batch_rate(env, steps: int, clock: StepClock | None = None) -> float:
@@ -155,6 +170,39 @@ def _single_thread_physics_us(task: str, steps: int = 200) -> float:
     return (time.perf_counter() - start) / (steps * 16) * 1e6
 
 
+def _scaling(tasks, sizes, threads, steps: int, repeats: int, state_workers: int) -> None:
+    """Prints raw and the batch on each thread count of `threads` (see the docstring), a
+    row as soon as it is measured."""
+    print(f"\nC threads: env-steps/s over {steps} control steps, medians of {repeats}")
+    row = "{:>20} {:>5} {:>7} {:>10} {:>10} {:>6} {:>14} {:>16}"
+    print(
+        row.format(
+            "task", "N", "threads", "raw", "batch", "/raw", "raw / 1 thread", "batch / 1 thread"
+        )
+    )
+    for task in tasks:
+        for n in sizes:
+            first = None
+            for count in threads:
+                raw = statistics.median(_raw_rate(task, n, steps, count) for _ in range(repeats))
+                env = _batch_env(task, n, count, state_workers)
+                rate = statistics.median(_batch_rate(env, steps) for _ in range(repeats))
+                env.close()
+                first = first or (raw, rate)
+                ratios = (rate / raw, raw / first[0], rate / first[1])
+                print(
+                    row.format(
+                        task,
+                        n,
+                        count,
+                        f"{raw:,.0f}",
+                        f"{rate:,.0f}",
+                        *(f"{r:.2f}x" for r in ratios),
+                    ),
+                    flush=True,
+                )
+
+
 def _resident_bytes() -> int:
     with open("/proc/self/statm") as statm:
         return int(statm.read().split()[1]) * os.sysconf("SC_PAGE_SIZE")
@@ -173,13 +221,31 @@ def main() -> None:
     parser.add_argument("--repeats", type=int, default=3)
     parser.add_argument("--no-async", action="store_true")
     parser.add_argument("--no-large", action="store_true")
+    parser.add_argument("--threads", default="", help="thread counts for the scaling table")
+    parser.add_argument("--scaling-steps", type=int, default=10)
+    parser.add_argument("--scaling-only", action="store_true")
+    parser.add_argument(
+        "--state-workers", type=int, default=1, help="initial-state processes (scaling table)"
+    )
     args = parser.parse_args()
     sizes = [int(s) for s in args.sizes.split(",")]
+    threads = [int(t) for t in args.threads.split(",") if t]
+    if args.scaling_only and not threads:
+        parser.error("--scaling-only: give the thread counts with --threads")
     cores = _cores()
     print(
         f"cores: {cores}, load average (1 min): {os.getloadavg()[0]:.2f}, "
         f"mujoco {mujoco.__version__}"
     )
+    if not args.scaling_only:
+        _main_tables(args, sizes)
+    if threads:
+        tasks = args.tasks.split(",")
+        _scaling(tasks, sizes, threads, args.scaling_steps, args.repeats, args.state_workers)
+
+
+def _main_tables(args, sizes) -> None:
+    """The env-steps/s table, the serial share and, unless --no-large, 4,096 lift worlds."""
     rows, serial_rows = [], []
     for task in args.tasks.split(","):
         steps = _episode_steps(task) + 10
