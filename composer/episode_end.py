@@ -1,7 +1,7 @@
 """How an episode ends, as Gymnasium names it, and when the next one starts: the one rule.
 
 Every adapter of this package that speaks Gymnasium's language (`composer.gym.GymnasiumEnv`
-and its vector envs, `composer.batch.BatchEnvironment` and its `WarpVectorEnv`,
+and its vector envs, `composer.batch.BatchEnvironment` and its `BatchVectorEnv`,
 `composer.rl.sb3`, `composer.rl.rsl_rl`) applies the rule from here; their docstrings point
 here rather than restate it. docs/concepts/gymnasium.md ("The rules every adapter shares")
 is its page for users.

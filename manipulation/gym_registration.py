@@ -12,14 +12,17 @@ Gymnasium's `TimeLimit`, which `gymnasium.make` adds for it, ends it at that sam
 
 `gymnasium.make(id, **kwargs)` builds `make_env(name, **kwargs)`;
 `gymnasium.make_vec(id, num_envs=n, vectorization_mode='vector_entry_point', **kwargs)`
-builds `make_vector_env(name, n, **kwargs)`: a `composer.gym.ThreadedVectorEnv`, with
-`backend='ray'` a `composer.gym.RayVectorEnv`, or with `backend='warp'` (and `device`) a
-`composer.batch.gym.WarpVectorEnv` (the tasks of `manipulation.batch.BATCHED`, extra
-`[warp]`). (Gymnasium 1.x refuses `vector_kwargs` in this mode; the vector env's options go
-in `kwargs` with the sub-environments' ones.)
+builds `make_vector_env(name, n, **kwargs)`: for the tasks of `manipulation.batch.BATCHED`
+(all 26) a `composer.batch.gym.BatchVectorEnv`, every world in one batch (the CPU batch on
+`mujoco.batch`, or MuJoCo Warp on a GPU; `device` chooses), unless an option of another
+backend is given; else, or with `backend='threads'`, a `composer.gym.ThreadedVectorEnv`, and
+with `backend='ray'` a `composer.gym.RayVectorEnv`. (Gymnasium 1.x refuses `vector_kwargs`
+in this mode; the vector env's options go in `kwargs` with the sub-environments' ones.)
 """
 
 import functools
+import importlib.util
+import inspect
 import math
 from typing import TYPE_CHECKING
 
@@ -30,7 +33,7 @@ import manipulation
 from manipulation.tasks import task_constants
 
 if TYPE_CHECKING:
-    from composer.batch.gym import WarpVectorEnv
+    from composer.batch.gym import BatchVectorEnv
     from composer.gym import GymnasiumEnv, RayVectorEnv, ThreadedVectorEnv
 
 __all__ = [
@@ -110,7 +113,7 @@ def make_vector_env(
     environment_name: str,
     num_envs: int,
     *,
-    backend: str = "threads",
+    backend: str | None = None,
     num_threads: int | None = None,
     address: str | None = None,
     envs_per_actor: int | None = None,
@@ -123,46 +126,60 @@ def make_vector_env(
     device: str | None = None,
     max_episode_steps: int | None = None,
     **kwargs,
-) -> "ThreadedVectorEnv | RayVectorEnv | WarpVectorEnv":
-    """Returns a vector env of `num_envs` copies of `make_env(environment_name)`.
+) -> "BatchVectorEnv | ThreadedVectorEnv | RayVectorEnv":
+    """Returns a vector env of `num_envs` worlds or copies of `make_env(environment_name)`.
 
     Args:
-      backend: "threads" for a `ThreadedVectorEnv` (takes `num_threads`), "ray" for a
+      backend: "batch" for a `BatchVectorEnv`: all worlds in one
+        `composer.batch.BatchEnvironment` on `device` (by default CUDA when MuJoCo Warp
+        sees a GPU, else the CPU batch on `mujoco.batch`), each world the episode of the
+        CPU environment seeded alike; kwargs go to the `BatchEnvironment` ("warp" is its
+        old name). "threads" for a `ThreadedVectorEnv` (takes `num_threads`), "ray" for a
         `RayVectorEnv` (takes `address`, `envs_per_actor`, `num_cpus_per_actor`,
-        `max_restarts`, `start_timeout`, `call_timeout`, defaults as there; needs the
-        extra `[ray]`).
-        "warp" for a `WarpVectorEnv`: all worlds on one MuJoCo Warp `device` (by default
-        CUDA when Warp sees a GPU, else "cpu"); kwargs go to
-        `composer.batch.BatchEnvironment`.
-      autoreset_mode, copy: passed to either.
+        `max_restarts`, `start_timeout`, `call_timeout`, defaults as there; needs the extra
+        `[ray]`). None picks "batch" for a task of `manipulation.batch.BATCHED` on a MuJoCo
+        with `mujoco.batch` when no option of the others is given (those above, shorter
+        `max_episode_steps`, or a `GymnasiumEnv` option such as `render_mode` or
+        `flatten_observations`), else "threads".
+      autoreset_mode, copy: passed to either (the batch hands out new arrays each step).
       max_episode_steps: what `gymnasium.make_vec` passes on (the id's, 250, unless given):
         fewer steps than the task's time limit end each sub-environment's episodes after
-        that many steps (truncated, as Gymnasium's `TimeLimit` does), except on "warp"
+        that many steps (truncated, as Gymnasium's `TimeLimit` does), except on "batch"
         (pass `time_limit` there); None, -1 or 250 leave them to the time limit.
-      **kwargs: passed to each sub-environment's `GymnasiumEnv`.
+      **kwargs: passed to each sub-environment's `GymnasiumEnv`, or to the
+        `BatchEnvironment`.
 
     Raises:
       ValueError: for an unknown backend, an option the backend does not take, or a
         `max_episode_steps` above the task's own (episodes cannot be made longer).
     """
     shorter_episodes = _shorter_episode_steps(max_episode_steps)
-    if backend == "warp":
+    other_options = {
+        "num_threads": num_threads,
+        "address": address,
+        "envs_per_actor": envs_per_actor,
+        "num_cpus_per_actor": num_cpus_per_actor,
+        "max_restarts": max_restarts,
+        "start_timeout": start_timeout,
+        "call_timeout": call_timeout,
+    }
+    given = [name for name, value in other_options.items() if value is not None]
+    if backend is None:
+        backend = _default_backend(environment_name, given, shorter_episodes, device, kwargs)
+    if backend in ("batch", "warp"):
         from manipulation import batch
 
-        others = dict(num_threads=num_threads, address=address, envs_per_actor=envs_per_actor)
-        given = [name for name, value in others.items() if value is not None]
-        ray_only = (num_cpus_per_actor, max_restarts, start_timeout, call_timeout)
-        if given or any(value is not None for value in ray_only):
-            raise ValueError(f"{(given or ['a Ray option'])[0]}: not an option of backend='warp'")
+        if given:
+            raise ValueError(f"{given[0]}: not an option of backend={backend!r}")
         if shorter_episodes is not None:
             raise ValueError(
-                f"max_episode_steps={max_episode_steps}: not an option of backend='warp'; "
+                f"max_episode_steps={max_episode_steps}: not an option of backend={backend!r}; "
                 "pass time_limit (seconds) instead"
             )
         kwargs.setdefault("strip_singleton_obs_buffer_dim", True)
         return batch.make_vector_env(environment_name, num_envs, device, autoreset_mode, **kwargs)
     if device is not None:
-        raise ValueError(f"device: an option of backend='warp', but backend is {backend!r}")
+        raise ValueError(f"device: an option of backend='batch', but backend is {backend!r}")
     from composer.gym import RayVectorEnv, ThreadedVectorEnv
 
     if shorter_episodes is None:
@@ -171,18 +188,10 @@ def make_vector_env(
         env_fn = functools.partial(
             _make_time_limited_env, environment_name, shorter_episodes, **kwargs
         )
-    ray_options = {
-        "address": address,
-        "envs_per_actor": envs_per_actor,
-        "num_cpus_per_actor": num_cpus_per_actor,
-        "max_restarts": max_restarts,
-        "start_timeout": start_timeout,
-        "call_timeout": call_timeout,
-    }
     if backend == "threads":
-        given = [name for name, value in ray_options.items() if value is not None]
-        if given:
-            raise ValueError(f"{given[0]}: an option of backend='ray', but backend is 'threads'")
+        if given and given != ["num_threads"]:
+            name = next(name for name in given if name != "num_threads")
+            raise ValueError(f"{name}: an option of backend='ray', but backend is 'threads'")
         return ThreadedVectorEnv(
             [env_fn] * num_envs, num_threads, autoreset_mode=autoreset_mode, copy=copy
         )
@@ -192,14 +201,35 @@ def make_vector_env(
                 "num_threads: an option of backend='threads', but backend is 'ray' (use "
                 "envs_per_actor and num_cpus_per_actor)"
             )
-        given = {name: value for name, value in ray_options.items() if value is not None}
+        ray_options = {name: other_options[name] for name in given}
         return RayVectorEnv(
             [env_fn] * num_envs,
-            **given,
+            **ray_options,
             autoreset_mode=autoreset_mode,
             copy=copy,
         )
-    raise ValueError(f"backend: expected 'threads', 'ray' or 'warp', got {backend!r}")
+    raise ValueError(f"backend: expected 'batch', 'threads', 'ray' or None, got {backend!r}")
+
+
+def _default_backend(
+    environment_name: str,
+    given: list[str],
+    shorter_episodes: int | None,
+    device: str | None,
+    kwargs: dict,
+) -> str:
+    """`make_vector_env`'s backend for None: "batch" where the batch runs the task and
+    nothing given asks for a sub-environment backend, else "threads"."""
+    from composer.gym import GymnasiumEnv
+    from manipulation import batch
+
+    if environment_name not in batch.BATCHED or given or shorter_episodes is not None:
+        return "threads"
+    if set(kwargs) & set(inspect.signature(GymnasiumEnv).parameters):
+        return "threads"
+    if device is None and importlib.util.find_spec("mujoco.batch") is None:
+        return "threads"
+    return "batch"
 
 
 def register_all() -> None:

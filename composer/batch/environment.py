@@ -522,10 +522,20 @@ class BatchEnvironment:
         """How the initial-state producers kept up (None for array-code initial states)."""
         return None if self._slots is None else self._slots.stats
 
-    def reseed(self, seed: int | np.random.RandomState | None) -> None:
-        """Reseeds every world's random generator from `seed`, as the constructor does; the
-        next `step` or `reset` starts every world's episode anew."""
-        self._random_states[:] = _random_states(self.num_envs, seed, None)
+    def reseed(
+        self,
+        seed: int | np.random.RandomState | None = None,
+        *,
+        random_states: Sequence[int | np.random.RandomState] | None = None,
+    ) -> None:
+        """Reseeds every world's random generator, as the constructor does: from `seed`, or
+        world i from `random_states[i]` when given; the next `step` or `reset` starts every
+        world's episode anew.
+
+        Raises:
+          ValueError: for `random_states` of other than `num_envs` entries.
+        """
+        self._random_states[:] = _random_states(self.num_envs, seed, random_states)
         if self._slots is not None:
             self._slots.restart(self._random_states)
         self._started = False

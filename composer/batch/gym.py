@@ -1,14 +1,20 @@
-"""A `BatchEnvironment` as a `gymnasium.vector.VectorEnv` (imports gymnasium and Warp).
+"""A `BatchEnvironment` as a `gymnasium.vector.VectorEnv` (imports gymnasium; Warp only
+where the batch runs on MuJoCo Warp).
 
 `step` returns `(observations, rewards, terminations, truncations, infos)` for all worlds at
 once. Terminations, truncations and the batch's autoreset mode (NEXT_STEP or SAME_STEP) are
 those of `composer.episode_end`; under SAME_STEP the last observations of the ended
 episodes are in `infos["final_obs"]`, for the worlds of `infos["_final_obs"]`.
-Observations are the batch's arrays: a dict of (num_envs, ...) float32 arrays (uint8 camera
-images), of the batch's `array_type` (NumPy, or Warp, torch or JAX arrays on its device), as
-are rewards, terminations and truncations.
+Observations are the batch's arrays: a dict of (num_envs, ...) arrays of the batch's float
+dtype (float64 on the CPU batch, float32 on MuJoCo Warp; uint8 camera images), of the
+batch's `array_type` (NumPy, or Warp, torch or JAX arrays on its device), as are rewards,
+terminations and truncations.
+
+`BatchVectorEnv` was called `WarpVectorEnv` when the batch ran on MuJoCo Warp only; that
+name still works.
 """
 
+from collections.abc import Sequence
 from typing import Any
 
 import numpy as np
@@ -20,7 +26,7 @@ from composer.batch.environment import AUTORESET_MODES, BatchEnvironment, BatchT
 from composer.episode_end import Autoreset
 from composer.gym.spec_spaces import box_from_spec
 
-__all__ = ["WarpVectorEnv", "autoreset_mode_name"]
+__all__ = ["BatchVectorEnv", "WarpVectorEnv", "autoreset_mode_name"]
 
 
 def autoreset_mode_name(mode) -> str:
@@ -32,19 +38,21 @@ def autoreset_mode_name(mode) -> str:
     name = Autoreset.of(AutoresetMode(mode)).value
     if name not in AUTORESET_MODES:
         raise ValueError(
-            f"autoreset_mode: backend 'warp' offers NEXT_STEP and SAME_STEP, got {mode!r}"
+            f"autoreset_mode: backend 'batch' offers NEXT_STEP and SAME_STEP, got {mode!r}"
         )
     return name
 
 
-class WarpVectorEnv(VectorEnv):
+class BatchVectorEnv(VectorEnv):
     """The worlds of `env` as one Gymnasium vector env.
 
     Args:
       env: the `BatchEnvironment` to run.
 
-    `reset(seed=s)` reseeds every world's random generator from `s` before resetting all
-    worlds; `reset(options=...)` is refused (every reset resets all worlds).
+    `reset(seed=s)` seeds world i with `s + i` (or `s[i]` for a list of `num_envs` ints), as
+    Gymnasium's vector envs and `composer.gym.ThreadedVectorEnv` seed their sub-environments,
+    before resetting all worlds: world i then plays the episodes of the CPU environment
+    reset with that seed. `reset(options=...)` is refused (every reset resets all worlds).
     """
 
     def __init__(self, env: BatchEnvironment):
@@ -62,7 +70,10 @@ class WarpVectorEnv(VectorEnv):
         self.action_space = batch_space(self.single_action_space, self.num_envs)
 
     def reset(
-        self, *, seed: int | None = None, options: dict[str, Any] | None = None
+        self,
+        *,
+        seed: int | Sequence[int] | None = None,
+        options: dict[str, Any] | None = None,
     ) -> tuple[dict[str, np.ndarray], dict[str, Any]]:
         """Resets every world.
 
@@ -70,14 +81,15 @@ class WarpVectorEnv(VectorEnv):
           (observations, infos): a dict of (num_envs, ...) arrays and an empty dict.
 
         Raises:
-          ValueError: if `options` is given.
+          ValueError: if `options` is given, or `seed` is a list of other than `num_envs`
+            ints (None entries included: every world is reseeded at once).
         """
         if options:
             raise ValueError(
-                f"options: a WarpVectorEnv resets all worlds and takes no options, got {options!r}"
+                f"options: a BatchVectorEnv resets all worlds and takes no options, got {options!r}"
             )
         if seed is not None:
-            self.env.reseed(seed)
+            self.env.reseed(random_states=_world_seeds(seed, self.num_envs))
         return self.env.reset().observation, {}
 
     def step(
@@ -108,3 +120,24 @@ class WarpVectorEnv(VectorEnv):
     def close_extras(self, **kwargs) -> None:
         """Stops the batch's initial-state producers."""
         self.env.close()
+
+
+# The name of `BatchVectorEnv` from when the batch ran on MuJoCo Warp only.
+WarpVectorEnv = BatchVectorEnv
+
+
+def _world_seeds(seed, num_envs: int) -> list[int]:
+    """One seed per world from `reset`'s `seed`: `seed + i`, or the list's ints."""
+    if isinstance(seed, int | np.integer) and not isinstance(seed, bool):
+        return [int(seed) + i for i in range(num_envs)]
+    seeds = list(seed) if isinstance(seed, Sequence | np.ndarray) else None
+    if (
+        seeds is None
+        or len(seeds) != num_envs
+        or not all(isinstance(s, int | np.integer) and not isinstance(s, bool) for s in seeds)
+    ):
+        raise ValueError(
+            f"seed: expected None, an int or {num_envs} ints (one per world; the batch "
+            f"reseeds every world at once), got {seed!r}"
+        )
+    return [int(s) for s in seeds]

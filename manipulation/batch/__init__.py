@@ -2,7 +2,8 @@
 
 Every environment of the suite has a batched version (`BATCHED`): the '<task>_features' ones
 (`BATCHED_FEATURES`) and the '<task>_vision' ones (`BATCHED_VISION`), whose 'front_close'
-camera MuJoCo Warp renders for every world (`composer.batch.cameras`). Each task
+camera renders for every world (OpenGL on the CPU batch, `composer.batch.gl_cameras`;
+MuJoCo Warp's ray tracer on Warp, `composer.batch.cameras`). Each task
 family registers its `composer.batch.BatchTask` in a module of its own (`reach`, `lift`,
 `place`, `stack`, `reassemble`); `arm_observables` registers the batched readers of the arm's
 observables, `seating` and `brick_tower` hold what the place, stack and reassemble tasks
@@ -83,14 +84,14 @@ def load(environment_name: str, num_envs: int, *, seed=None, **kwargs) -> batch.
 def make_vector_env(
     environment_name: str, num_envs: int, device: str | None, autoreset_mode, **kwargs
 ):
-    """`load(...)` as a `composer.batch.gym.WarpVectorEnv` (`gymnasium.make_vec`'s backend
-    'warp', with Gymnasium's NEXT_STEP or SAME_STEP autoreset); imports gymnasium.
+    """`load(...)` as a `composer.batch.gym.BatchVectorEnv` (`gymnasium.make_vec`'s backend
+    'batch', with Gymnasium's NEXT_STEP or SAME_STEP autoreset); imports gymnasium.
 
     Raises:
       ValueError: for Gymnasium's DISABLED autoreset mode.
     """
-    from composer.batch.gym import WarpVectorEnv, autoreset_mode_name
+    from composer.batch.gym import BatchVectorEnv, autoreset_mode_name
 
     mode = autoreset_mode_name(autoreset_mode)
     env = load(environment_name, num_envs, device=device, autoreset_mode=mode, **kwargs)
-    return WarpVectorEnv(env)
+    return BatchVectorEnv(env)

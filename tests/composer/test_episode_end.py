@@ -3,7 +3,7 @@
 The rule on its own (scalars and arrays), then the adapters that apply it, each with one
 episode that the task ends (discount 0: terminated) beside one that the time limit ends
 (truncated), under both autoreset modes: `GymnasiumEnv`, `ThreadedVectorEnv` and the
-batch's `WarpVectorEnv`.
+batch's `BatchVectorEnv`.
 """
 
 import numpy as np
@@ -217,11 +217,11 @@ def test_threaded_vector_env_ends_and_restarts_episodes_as_the_mode_says(mode):
 
 
 def _batch_with_two_ends(mode: str):
-    """Two worlds of reach_site_features as a `WarpVectorEnv`: world 0's task ends its
+    """Two worlds of reach_site_features as a `BatchVectorEnv`: world 0's task ends its
     episodes after two control steps with discount 0, world 1's time limit after three."""
     pytest.importorskip("mujoco_warp", reason="needs MuJoCo Warp: pip install -e '.[warp]'")
     from composer.batch import BatchEnvironment
-    from composer.batch.gym import WarpVectorEnv
+    from composer.batch.gym import BatchVectorEnv
     from manipulation import batch as manipulation_batch
     from manipulation.tasks import observation_settings
     from manipulation.tasks.reach import Reach
@@ -248,7 +248,7 @@ def _batch_with_two_ends(mode: str):
         time_limit=3 * control_timestep,
         autoreset_mode=mode,
     )
-    return WarpVectorEnv(batch)
+    return BatchVectorEnv(batch)
 
 
 @pytest.mark.warp

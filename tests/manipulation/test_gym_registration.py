@@ -10,6 +10,7 @@ from gymnasium.utils.env_checker import check_env
 
 import composer
 import manipulation
+from composer.batch.gym import BatchVectorEnv
 from composer.gym import GymnasiumEnv, ThreadedVectorEnv
 from manipulation.tasks import registry
 
@@ -40,11 +41,19 @@ def test_make_builds_the_task_with_the_render_mode():
     env.close()
 
 
-def test_make_vec_with_the_vector_entry_point_gives_the_threaded_vector_env():
+@pytest.mark.parametrize(
+    "backend, vector_type",
+    [(None, BatchVectorEnv), ("batch", BatchVectorEnv), ("threads", ThreadedVectorEnv)],
+)
+def test_make_vec_with_the_vector_entry_point_gives_the_batch_unless_told(backend, vector_type):
+    options = {} if backend is None else {"backend": backend}
     envs = gymnasium.make_vec(
-        "composer/reach_site_features-v0", num_envs=3, vectorization_mode="vector_entry_point"
+        "composer/reach_site_features-v0",
+        num_envs=3,
+        vectorization_mode="vector_entry_point",
+        **options,
     )
-    assert isinstance(envs, ThreadedVectorEnv)
+    assert type(envs) is vector_type
     assert envs.num_envs == 3
     observations, _ = envs.reset(seed=0)
     _, rewards, *_ = envs.step(np.zeros((3, 9)))
@@ -66,8 +75,24 @@ def test_make_vec_passes_thread_count_and_autoreset_mode():
     envs.close()
 
 
+@pytest.mark.parametrize(
+    "option", [{"num_threads": 2}, {"max_episode_steps": 5}, {"flatten_observations": True}]
+)
+def test_make_vec_picks_the_threaded_env_for_an_option_only_it_takes(option):
+    envs = gymnasium.make_vec(
+        "composer/reach_site_features-v0",
+        num_envs=2,
+        vectorization_mode="vector_entry_point",
+        **option,
+    )
+    assert type(envs) is ThreadedVectorEnv
+    envs.close()
+
+
 def test_make_vec_rejects_an_unknown_backend():
-    with pytest.raises(ValueError, match="backend: expected 'threads', 'ray' or 'warp', got 'mpi'"):
+    with pytest.raises(
+        ValueError, match="backend: expected 'batch', 'threads', 'ray' or None, got 'mpi'"
+    ):
         gymnasium.make_vec(
             "composer/reach_site_features-v0",
             num_envs=2,
@@ -141,12 +166,17 @@ def test_plain_id_works_once_manipulation_is_imported_before_gymnasium(fresh_pyt
     assert _output(result) == "{'environment_name': 'reach_site_vision'}"
 
 
-def test_threaded_vector_env_matches_gymnasiums_sync_vector_env_step_for_step():
-    kinds = ("vector_entry_point", "sync")
+def test_the_batch_and_threaded_env_match_gymnasiums_sync_vector_env_step_for_step():
+    # Sub-environment (or world) i is seeded with 4 + i in each.
+    name = "composer/lift_brick_features-v0"
     vector_envs = [
-        gymnasium.make_vec("composer/lift_brick_features-v0", num_envs=2, vectorization_mode=m)
-        for m in kinds
+        gymnasium.make_vec(name, num_envs=2, vectorization_mode="sync"),
+        gymnasium.make_vec(name, num_envs=2, vectorization_mode="vector_entry_point"),
+        gymnasium.make_vec(
+            name, num_envs=2, vectorization_mode="vector_entry_point", backend="threads"
+        ),
     ]
+    assert [type(envs) for envs in vector_envs[1:]] == [BatchVectorEnv, ThreadedVectorEnv]
     actions = np.random.RandomState(0).uniform(-0.5, 0.5, size=(3, 2, 9))
     results = []
     for envs in vector_envs:
@@ -157,8 +187,9 @@ def test_threaded_vector_env_matches_gymnasiums_sync_vector_env_step_for_step():
             trace += [observations["jaco_arm/joints_pos"].copy(), rewards]
         results.append(trace)
         envs.close()
-    for ours, sync in zip(*results):
-        np.testing.assert_array_equal(ours, sync)
+    for sync, *ours in zip(*results):
+        for values in ours:
+            np.testing.assert_array_equal(values, sync)
 
 
 def test_make_with_human_render_mode_opens_no_window_before_the_first_reset():

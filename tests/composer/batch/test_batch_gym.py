@@ -1,4 +1,4 @@
-"""The batched tasks through gymnasium.make_vec(..., backend='warp') as a VectorEnv."""
+"""The batched tasks through gymnasium.make_vec(..., backend='batch') as a VectorEnv."""
 
 import gymnasium
 import numpy as np
@@ -13,12 +13,12 @@ NUM_ENVS = 2
 
 
 @pytest.mark.parametrize("name", manipulation_batch.BATCHED)
-def test_make_vec_with_backend_warp_steps_every_world(name):
+def test_make_vec_with_backend_batch_steps_every_world_on_warp(name):
     env = gymnasium.make_vec(
         f"composer/{name}-v0",
         num_envs=NUM_ENVS,
         vectorization_mode="vector_entry_point",
-        backend="warp",
+        backend="batch",
         device="warp-cpu",
     )
     assert isinstance(env, gymnasium.vector.VectorEnv)
@@ -37,7 +37,7 @@ def test_reset_with_the_same_seed_gives_the_same_first_observations():
         "composer/reach_site_features-v0",
         num_envs=2,
         vectorization_mode="vector_entry_point",
-        backend="warp",
+        backend="batch",
     )
     first, _ = env.reset(seed=11)
     first = {key: value.copy() for key, value in first.items()}
@@ -53,7 +53,7 @@ def test_time_limit_truncates_every_world_and_the_next_step_resets_it():
         "composer/reach_site_features-v0",
         num_envs=2,
         vectorization_mode="vector_entry_point",
-        backend="warp",
+        backend="batch",
         time_limit=0.08,
     )
     env.reset(seed=0)
@@ -67,12 +67,36 @@ def test_time_limit_truncates_every_world_and_the_next_step_resets_it():
     np.testing.assert_array_equal(rewards, 0.0)
 
 
-def test_warp_backend_refuses_a_thread_option():
-    with pytest.raises(ValueError, match="num_threads: not an option of backend='warp'"):
+def test_batch_backend_refuses_a_thread_option():
+    with pytest.raises(ValueError, match="num_threads: not an option of backend='batch'"):
         gymnasium.make_vec(
             "composer/reach_site_features-v0",
             num_envs=2,
             vectorization_mode="vector_entry_point",
-            backend="warp",
+            backend="batch",
             num_threads=2,
         )
+
+
+def test_the_old_backend_and_class_names_still_work():
+    from composer.batch.gym import BatchVectorEnv, WarpVectorEnv
+
+    assert WarpVectorEnv is BatchVectorEnv
+    env = gymnasium.make_vec(
+        "composer/reach_site_features-v0",
+        num_envs=2,
+        vectorization_mode="vector_entry_point",
+        backend="warp",
+    )
+    assert type(env) is BatchVectorEnv
+    env.close()
+
+
+@pytest.mark.parametrize("seed", [[1], [1, None], "1", [1.0, 2.0]])
+def test_reset_refuses_a_seed_that_is_not_one_int_per_world(seed):
+    env = gymnasium.make_vec(
+        "composer/reach_site_features-v0", num_envs=2, vectorization_mode="vector_entry_point"
+    )
+    with pytest.raises(ValueError, match=r"seed: expected None, an int or 2 ints \(one per world"):
+        env.reset(seed=seed)
+    env.close()

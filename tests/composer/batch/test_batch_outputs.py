@@ -151,7 +151,7 @@ def test_gymnasium_vector_env_returns_warp_arrays():
         "composer/reach_site_features-v0",
         num_envs=2,
         vectorization_mode="vector_entry_point",
-        backend="warp",
+        backend="batch",
         array_type="warp",
         device="warp-cpu",
     )
