@@ -102,6 +102,21 @@ class FlatObservations:
             dict,
         )
 
+    def rows(self, observations: Mapping[str, np.ndarray]) -> Any:
+        """Observations of many environments (a dict of the spec's arrays, each with a
+        leading axis of environments) flattened environment by environment: `space`'s
+        layout behind that axis."""
+        count = len(next(iter(observations.values())))
+        return self._pack(
+            np.concatenate(
+                [observations[name].reshape(count, -1) for name in self.features], axis=1
+            )
+            if self.features
+            else None,
+            {name: observations[name] for name in self.images},
+            dict,
+        )
+
     def _pack(self, features: Any, images: dict[str, Any], mapping: Callable[[dict], Any]) -> Any:
         """The one choice of the table above, for spaces and for observations alike."""
         if self.features and not self.images:

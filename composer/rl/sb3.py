@@ -4,7 +4,9 @@
 `autoreset_mode=SAME_STEP`) as a `stable_baselines3.common.vec_env.VecEnv`, so SB3's
 algorithms (`PPO`, `SAC`, ...), its wrappers (`VecNormalize`, `VecMonitor`) and
 `evaluate_policy` train and evaluate on it directly; `make_vec_env` builds one from a
-registered id or an environment factory. Importing this module imports
+registered id or an environment factory (with `backend='batch'`, a batch of worlds in a
+`composer.rl.sb3_batch.Sb3BatchVecEnv`, which keeps the same conventions). Importing this
+module imports
 Stable-Baselines3 and torch (the extra `[sb3]`); `import composer` does not.
 
 SB3's conventions, as `step_wait` keeps them (those of SB3's own `DummyVecEnv`):
@@ -46,8 +48,8 @@ except ImportError as error:
 
 __all__ = ["BACKENDS", "Sb3VecEnv", "make_vec_env"]
 
-# The vector env backends `make_vec_env` takes (as `composer.gym`'s registered ids name them).
-BACKENDS = ("threads", "ray")
+# The vector env backends `make_vec_env` takes (as the registered ids' `make_vec` names them).
+BACKENDS = ("threads", "ray", "batch")
 
 # What Gymnasium's SAME_STEP autoreset adds to the infos of a step that ended episodes.
 _AUTORESET_KEYS = frozenset({"final_obs", "_final_obs", "final_info", "_final_info"})
@@ -242,7 +244,10 @@ def make_vec_env(
       seed: with an int, sub-environment i is seeded with `seed + i` at the first
         `reset()`; None leaves them unseeded.
       backend: 'threads' for a `composer.gym.ThreadedVectorEnv`, 'ray' for a
-        `composer.gym.RayVectorEnv` (the extra `[ray]`).
+        `composer.gym.RayVectorEnv` (the extra `[ray]`), 'batch' (an id of
+        `manipulation.batch.BATCHED` only) for a `composer.batch.gym.BatchVectorEnv` in a
+        `composer.rl.sb3_batch.Sb3BatchVecEnv`, which takes `flatten_observations` itself
+        and gives the other kwargs to the `BatchEnvironment` (`device`, `time_limit`, ...).
       monitor: wrap the result in SB3's `VecMonitor`, which puts each finished episode's
         return and length in `info['episode']` (SB3 logs them as `rollout/ep_rew_mean`,
         `evaluate_policy` reads them).
@@ -251,7 +256,8 @@ def make_vec_env(
         `envs_per_actor`); for a function, the vector env's options only.
 
     Returns:
-      An `Sb3VecEnv`, in a `VecMonitor` when `monitor` is True.
+      An `Sb3VecEnv` (an `Sb3BatchVecEnv` for 'batch'), in a `VecMonitor` when `monitor`
+      is True.
 
     Raises:
       ValueError: for an unknown `backend`, `num_envs` < 1, an id without a vector entry
@@ -269,7 +275,9 @@ def make_vec_env(
             f"{kwargs['autoreset_mode']!r}"
         )
     mode = AutoresetMode.SAME_STEP
-    if isinstance(env, str):
+    if backend == "batch":
+        venv = _batch_vec_env(env, int(num_envs), mode, kwargs)
+    elif isinstance(env, str):
         entry_point = gymnasium.spec(env).vector_entry_point
         if entry_point is None:
             raise ValueError(
@@ -301,7 +309,29 @@ def make_vec_env(
             "env: expected a registered Gymnasium id or a function returning a "
             f"gymnasium.Env, got {type(env).__name__}"
         )
-    venv: VecEnv = Sb3VecEnv(vector_env)
+    if backend != "batch":
+        venv = Sb3VecEnv(vector_env)
     if seed is not None:
         venv.seed(seed)
     return VecMonitor(venv) if monitor else venv
+
+
+def _batch_vec_env(env: Any, num_envs: int, mode: AutoresetMode, kwargs: dict) -> VecEnv:
+    """`make_vec_env`'s backend 'batch': the id's `BatchVectorEnv` in an `Sb3BatchVecEnv`."""
+    if not isinstance(env, str):
+        raise TypeError(
+            "env: backend 'batch' needs the registered id of a batched task (such as "
+            f"'composer/reach_site_features-v0'), got {type(env).__name__}"
+        )
+    from composer.rl.sb3_batch import Sb3BatchVecEnv
+
+    flatten = bool(kwargs.pop("flatten_observations", False))
+    vector_env = gymnasium.make_vec(
+        env,
+        num_envs=num_envs,
+        vectorization_mode="vector_entry_point",
+        backend="batch",
+        autoreset_mode=mode,
+        **kwargs,
+    )
+    return Sb3BatchVecEnv(vector_env, flatten_observations=flatten)

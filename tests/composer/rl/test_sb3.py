@@ -353,7 +353,10 @@ def test_refuses_a_vector_env_of_another_kind():
 @pytest.mark.parametrize(
     ("arguments", "message"),
     [
-        (dict(num_envs=2, backend="processes"), r"backend: expected one of \('threads', 'ray'\)"),
+        (
+            dict(num_envs=2, backend="processes"),
+            r"backend: expected one of \('threads', 'ray', 'batch'\)",
+        ),
         (dict(num_envs=0), r"num_envs: expected an integer >= 1, got 0"),
         (dict(num_envs=2, autoreset_mode="NextStep"), r"autoreset_mode: make_vec_env always"),
     ],
