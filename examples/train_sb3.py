@@ -2,7 +2,10 @@
 
 The task is `--task`, reach_site_features unless told otherwise (any task with the tag
 'features'). The training episodes run in a `composer.gym.ThreadedVectorEnv` seen by SB3
-through `composer.rl.sb3` (the extra `[sb3]`). Before training, uniformly random actions
+through `composer.rl.sb3` (the extra `[sb3]`), or with `--backend batch` in one batch of
+worlds (`composer.batch`, the CPU batch on `mujoco.batch`) through
+`composer.rl.sb3_batch`, each world the episodes of the threaded env's sub-environment
+seeded alike. Before training, uniformly random actions
 play 5 seeded 10 s episodes, the baseline; then every `--eval-every` seconds the
 deterministic policy plays the same 5 (in a vector env of their own). The script prints
 their mean return and success rate (`info['is_success']` at the episode's end) and, for
@@ -13,7 +16,8 @@ matplotlib), the last policy to OUT/sac_TASK.zip and the one with the best evalu
 return to OUT/best_sac_TASK.zip.
 
 Usage: python examples/train_sb3.py [--task reach_site_features] [--minutes 10]
-  [--out runs/train_sb3] [--num-envs 4] [--seed 0] [--eval-every 30] [--smoke]
+  [--out runs/train_sb3] [--num-envs 4] [--seed 0] [--eval-every 30]
+  [--backend threads|batch] [--smoke]
 
 --smoke trains for a few hundred steps and evaluates once (seconds; for CI).
 """
@@ -32,6 +36,8 @@ import numpy as np
 
 import manipulation
 from composer.gym import GymnasiumEnv
+from manipulation import gym_registration
+from manipulation.tasks.task_constants import CONTROL_TIMESTEP
 
 try:
     import torch
@@ -77,6 +83,25 @@ def make_env(task: str, max_episode_steps: int | None = None) -> gymnasium.Env:
     if max_episode_steps is not None:
         env = gymnasium.wrappers.TimeLimit(env, max_episode_steps)
     return ReachDistance(env) if task == REACH else env
+
+
+def make_train_env(args: argparse.Namespace):
+    """The training envs of `--backend`, flattened, their episodes ending (truncated) after
+    `--train-episode-steps` steps, world or sub-environment i seeded with `--seed` + i."""
+    if args.backend == "batch":
+        return make_vec_env(
+            gym_registration.env_id(args.task),
+            args.num_envs,
+            seed=args.seed,
+            backend="batch",
+            flatten_observations=True,
+            time_limit=args.train_episode_steps * CONTROL_TIMESTEP,
+        )
+    return make_vec_env(
+        functools.partial(make_env, args.task, args.train_episode_steps),
+        args.num_envs,
+        seed=args.seed,
+    )
 
 
 class RandomPolicy:
@@ -257,6 +282,12 @@ def main(argv: list[str] | None = None) -> list[Evaluation]:
         help="training episodes end (truncated) after this many 0.04 s steps; evaluation "
         "episodes last the task's 250",
     )
+    parser.add_argument(
+        "--backend",
+        default="threads",
+        choices=("threads", "batch"),
+        help="the training envs: a threaded vector env, or one batch of worlds",
+    )
     parser.add_argument("--smoke", action="store_true", help="a few hundred steps, for CI")
     args = parser.parse_args(argv)
     if args.num_envs < 1:
@@ -277,11 +308,7 @@ def main(argv: list[str] | None = None) -> list[Evaluation]:
     )
     # The budget starts here: the baseline's seconds are not the policy's.
     start = time.perf_counter()
-    train_env = make_vec_env(
-        functools.partial(make_env, args.task, args.train_episode_steps),
-        args.num_envs,
-        seed=args.seed,
-    )
+    train_env = make_train_env(args)
     # The smoke run ends after its steps and evaluates once, at the end.
     deadline = math.inf if args.smoke else start + args.minutes * 60
     every = math.inf if args.smoke else args.eval_every
