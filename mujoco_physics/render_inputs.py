@@ -30,7 +30,7 @@ import numpy as np
 
 from mujoco_physics.field_layout import MODEL_FIELDS
 
-__all__ = ["RenderInputs", "upload_asset_family"]
+__all__ = ["RenderInputs", "held_by_context", "upload_asset_family"]
 
 # Array families the context copies, by name prefix, with the function that uploads one
 # object of the family into a live context (None: only a new context refreshes it). The
@@ -50,6 +50,12 @@ def _family_arrays(prefix: str) -> tuple[str, ...]:
 
 
 _FAMILY_ARRAYS = {prefix: _family_arrays(prefix) for prefix in _FAMILIES}
+
+
+def held_by_context(name: str) -> bool:
+    """Whether a render context copies MjModel array `name` when it is made (an asset
+    family's arrays, materials' texture mapping, or `geom_size`, of which planes' grids)."""
+    return name == "geom_size" or name.startswith(tuple(_FAMILIES))
 
 
 def _field_paths(struct, prefix: tuple[str, ...] = ()) -> list[tuple[str, ...]]:

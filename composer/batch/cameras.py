@@ -188,3 +188,7 @@ class BatchCameras:
     def readers(self) -> dict[str, Callable[[], Any]]:
         """A reader per observable: the images of the last `render`, an `xp` view."""
         return {name: (lambda view=view: view) for name, (_, view) in self._outputs.items()}
+
+    def close(self) -> None:
+        """Does nothing: the render context's device memory goes with the object (kept so
+        that both devices' cameras close alike, `composer.batch.gl_cameras`)."""

@@ -451,8 +451,10 @@ class BatchEnvironment:
 
     @property
     def cameras(self):
-        """The `composer.batch.cameras.BatchCameras` that renders the camera observables
-        for every world, or None when no enabled observable is a camera."""
+        """What renders the camera observables for every world: a
+        `composer.batch.gl_cameras.GLBatchCameras` (OpenGL) on the CPU batch, a
+        `composer.batch.cameras.BatchCameras` (MuJoCo Warp's ray tracer) on Warp; None when
+        no enabled observable is a camera."""
         return self._observables.cameras
 
     @property
@@ -735,9 +737,13 @@ class BatchEnvironment:
         return diverged
 
     def close(self) -> None:
-        """Stops the initial-state producers."""
-        if self._slots is not None:
-            self._slots.close()
+        """Stops the initial-state producers and releases the cameras' renderers (on the
+        CPU batch, their OpenGL contexts and worker threads)."""
+        try:
+            if self._slots is not None:
+                self._slots.close()
+        finally:
+            self._observables.close()
 
 
 def _rows(xp, mask, like):

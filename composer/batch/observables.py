@@ -7,7 +7,9 @@ every world, an array with a leading `num_envs` axis. It dispatches on the obser
 read through their public `selection`, the `MJCFSelection` their CPU reading uses too
 (`selection_reader`). A package registers readers for its own observable types with
 `batch_reader.register`. Camera observables (`MJCFCamera`) are rendered together, once
-per observation (`composer.batch.cameras`).
+per observation: with OpenGL on the CPU batch, exactly the CPU environment's images
+(`composer.batch.gl_cameras`), by MuJoCo Warp's ray tracer on Warp
+(`composer.batch.cameras`).
 
 Readers that are `composer.batch.gather.FieldGather`s (the MJCF features, and readers
 registered as such) are read together by one kernel launch; other readers are called one
@@ -103,6 +105,18 @@ def _check_options(name: str, observable: base.Observable) -> None:
         )
 
 
+def _batch_cameras(cameras: Mapping[str, MJCFCamera], physics):
+    """The renderer of the camera observables `cameras`: OpenGL on the CPU batch, bit for
+    bit the CPU environment's images; MuJoCo Warp's ray tracer on Warp."""
+    if physics.on_warp:
+        from composer.batch.cameras import BatchCameras
+
+        return BatchCameras(cameras, physics)
+    from composer.batch.gl_cameras import GLBatchCameras
+
+    return GLBatchCameras(cameras, physics)
+
+
 class BatchObservables:
     """Reads the enabled observables of a task for every world, on the device.
 
@@ -135,25 +149,16 @@ class BatchObservables:
             for name, o in enabled.items()
             if isinstance(o, MJCFCamera) and name not in readers
         }
-        self._cameras = None
-        if cameras and not physics.on_warp:
-            raise NotImplementedError(
-                f"camera observables {sorted(cameras)}: the CPU batch (device='cpu') does not "
-                "render cameras yet; pass device='warp-cpu' (MuJoCo Warp's CPU device) or a "
-                "CUDA device, or disable these observables"
-            )
-        if cameras:
-            from composer.batch.cameras import BatchCameras
-
-            self._cameras = BatchCameras(cameras, physics)
-            readers.update(self._cameras.readers())
-        self._readers: dict[str, Reader] = {}
         for name, observable in enabled.items():
             _check_options(name, observable)
-            reader = readers.get(name)
-            if reader is None:
-                reader = batch_reader(observable, physics)
-            self._readers[name] = reader
+        self._cameras = _batch_cameras(cameras, physics) if cameras else None
+        if self._cameras is not None:
+            readers.update(self._cameras.readers())
+        try:
+            self._readers = self._make_readers(enabled, physics, readers)
+        except BaseException:
+            self.close()
+            raise
         self._image_names = frozenset(cameras)
         self._add_buffer_axis = not strip_singleton_obs_buffer_dim
         self._xp = physics.xp
@@ -167,11 +172,26 @@ class BatchObservables:
         self._gather = ObservationGather(physics, gathered) if gathered else None
         self._called = {name: r for name, r in self._readers.items() if name not in gathered}
 
+    @staticmethod
+    def _make_readers(enabled, physics, readers: Mapping[str, Reader]) -> dict[str, Reader]:
+        """A reader per enabled observable: the given one, or the registered one."""
+        made = {}
+        for name, observable in enabled.items():
+            reader = readers.get(name)
+            made[name] = batch_reader(observable, physics) if reader is None else reader
+        return made
+
     @property
     def cameras(self):
-        """The `composer.batch.cameras.BatchCameras` rendering the camera observables, or
-        None when no enabled observable is a camera."""
+        """What renders the camera observables (`composer.batch.gl_cameras.GLBatchCameras`
+        on the CPU batch, `composer.batch.cameras.BatchCameras` on MuJoCo Warp), or None
+        when no enabled observable is a camera."""
         return self._cameras
+
+    def close(self) -> None:
+        """Releases what the cameras hold (the CPU batch's OpenGL contexts and threads)."""
+        if self._cameras is not None:
+            self._cameras.close()
 
     def dtype(self, name: str) -> np.dtype:
         """The NumPy dtype of observation `name`: the batch's float dtype, or a camera

@@ -22,7 +22,7 @@ def _block_under(heading: str) -> str:
     return match.group(1)
 
 
-@pytest.mark.parametrize("heading", ["The environment", "Device arrays: `array_type`"])
+@pytest.mark.parametrize("heading", ["The environment", "Device arrays: `array_type`", "Cameras"])
 def test_batch_page_example_runs(heading, tmp_path, monkeypatch):
     monkeypatch.chdir(tmp_path)
     with contextlib.redirect_stdout(io.StringIO()):

@@ -174,11 +174,6 @@ def test_a_mujoco_without_mujoco_batch_is_told_what_to_do(monkeypatch):
         batch.BatchEnvironment(Reach(observation_settings.FEATURES), 2, device="cpu")
 
 
-def test_camera_observables_are_refused_naming_the_devices_that_render():
-    with pytest.raises(NotImplementedError, match=r"does not render cameras yet.*warp-cpu"):
-        manipulation_batch.load("reach_site_vision", 2, seed=0, device="cpu")
-
-
 def test_a_forward_of_some_worlds_leaves_the_others_as_they_were():
     env = manipulation_batch.load("reach_site_features", 3, seed=0, device="cpu")
     env.reset()
