@@ -97,7 +97,7 @@ def test_the_supported_releases_section_quotes_ci_s_releases():
 
 def test_the_batch_row_counts_the_registered_tasks_and_quotes_the_h200_training_run():
     names = registry.names()
-    row = _status_row("Batched simulation on MuJoCo Warp")
+    row = _status_row("Batched simulation on `mujoco.batch` (CPU) and MuJoCo Warp")
     vision = sum(name.endswith("_vision") for name in names)
     assert f"all {len(names)} manipulation tasks, the {vision} `*_vision` ones" in row
     with open(DATA / "train_rsl_rl_reach_site_h200.csv", newline="", encoding="utf-8") as file:
