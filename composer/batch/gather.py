@@ -1,19 +1,19 @@
 """Observations read by one kernel: every entry a fixed function of a few field entries.
 
 A `FieldGather` is a batched reader whose every entry is the sum of a few entries of one
-float32 field of a world, each times a fixed weight, optionally passed through sin or cos:
-an MJCF feature's selected entries (weight 1), a joint torque (a sensor's 3-vector on the
-joint's axis), a joint angle's sine and cosine. `ObservationGather` reads all of a batch's
-`FieldGather`s into a new block of device memory per read, so that a result the caller
-keeps is never written again (see `composer.batch.arrays`): with one launch of
-`kernels.gather_columns`, one thread per world, where task code runs in torch (CUDA, and
-`namespace="torch"` on Warp's CPU device); with a few NumPy calls per observable, written
-straight into the block, where it runs in NumPy (Warp's CPU device): a slice or a
-`numpy.take`, one BLAS product for weighted sums, sine and cosine of entries taken once
-(`_numpy_plan`), because Warp's CPU kernels gather about six times slower than
-`numpy.take` (about 10 ns an entry against 1.5, measured on the development machine,
-2026-11). Both execute the same plan, the `FieldGather`s' entries, weights and ops; the
-torch tests compare the two.
+float field of a world (float64 on the CPU batch, float32 on MuJoCo Warp), each times a
+fixed weight, optionally passed through sin or cos: an MJCF feature's selected entries
+(weight 1), a joint torque (a sensor's 3-vector on the joint's axis), a joint angle's sine
+and cosine. `ObservationGather` reads all of a batch's `FieldGather`s into a new block of
+device memory per read, so that a result the caller keeps is never written again (see
+`composer.batch.arrays`): with one launch of `kernels.gather_columns`, one thread per world,
+where task code runs in torch (CUDA, and `namespace="torch"` on Warp's CPU device); with a
+few NumPy calls per observable, written straight into the block, where it runs in NumPy (the
+CPU batch, Warp's CPU device): a slice or a `numpy.take`, one BLAS product for weighted
+sums, sine and cosine of entries taken once (`_numpy_plan`), because Warp's CPU kernels
+gather about six times slower than `numpy.take` (about 10 ns an entry against 1.5, measured
+on the development machine, 2026-11). Both execute the same plan, the `FieldGather`s'
+entries, weights and ops; the torch tests compare the two.
 
 Kernel blocks are cut from chunks of `ObservationGather.CHUNK_BYTES` (at least one read each):
 a chunk is allocated once per so many reads and stays alive while any of its reads is

@@ -123,8 +123,9 @@ class BatchTask:
         return {}
 
     def before_step(self, physics, action) -> None:
-        """Applies the actions, shape (num_envs, nu) float32 on the device; by default sets
-        every world's controls."""
+        """Applies the actions, shape (num_envs, nu), of the batch's float dtype (float64
+        on the CPU batch, float32 on MuJoCo Warp); by default sets every world's
+        controls."""
         physics.data.ctrl[...] = action
 
     def get_reward(self, physics) -> Any:
