@@ -12,12 +12,15 @@ and shape behind a leading num_envs axis: RGB (height, width, 3) uint8, depth (h
 width, 1) float32 metres, segmentation (height, width, 2) int32; each observable's
 `scene_option` and `render_flag_overrides` apply as on the CPU.
 
-Threads. The worlds are split into contiguous runs, one per worker thread
-(`min(num_envs, physics.threads)` of them). A worker thread owns its rendering state: a
-copy of the model, an MjData and the OpenGL contexts of its renderers, which are current on
+The render thread. Every world renders on one worker thread, which owns the rendering
+state: a copy of the model, an MjData and the OpenGL contexts of its renderers, current on
 that thread only. The state is made on the thread when the cameras are made (so a missing
 OpenGL fails there, naming `MUJOCO_GL`), reused by every `render`, and released on the
-thread by `close` (`BatchEnvironment.close` calls it), which then ends the threads.
+thread by `close` (`BatchEnvironment.close` calls it), which then ends the thread. One
+thread, not one per core: two threads rendering at once, each with its own contexts,
+crashed (a segmentation fault in `mjr_render` and `mjr_readPixels`) under Mesa's software
+EGL in CI (2026-12-07), where one thread was also the faster (it spreads each frame over
+the cores itself).
 
 What a render context copies from the model when it is made (meshes, textures, `vis`,
 plane sizes, materials' texture mapping: `mujoco_physics.render_inputs`) is refreshed world
@@ -39,7 +42,6 @@ import numpy as np
 
 from composer.batch.mujoco_batch import batch_model_fields
 from composer.observation.observable.mjcf import MJCFCamera
-from composer.utils import argument_checks
 from mujoco_physics import engine
 from mujoco_physics.render_inputs import held_by_context
 
@@ -116,17 +118,13 @@ class GLBatchCameras:
     Args:
       observables: the enabled camera observables by key.
       physics: the `MujocoBatchPhysics` whose worlds they see.
-      threads: the worker threads that render (None: `min(num_envs, physics.threads)`).
 
     Raises:
       RuntimeError: where no OpenGL context can be made; the message names the camera
         observable and `MUJOCO_GL`, and the values to try.
-      ValueError: for `threads` other than an integer >= 1.
     """
 
-    def __init__(
-        self, observables: Mapping[str, MJCFCamera], physics, *, threads: int | None = None
-    ):
+    def __init__(self, observables: Mapping[str, MJCFCamera], physics):
         self._physics = physics
         self._observables = dict(observables)
         self._camera_ids = tuple(
@@ -140,9 +138,7 @@ class GLBatchCameras:
             name: np.zeros((physics.num_envs, *spec.shape), spec.dtype)
             for name, spec in specs.items()
         }
-        if threads is None:
-            threads = physics.threads
-        count = min(physics.num_envs, argument_checks.integer(threads=threads))
+        count = 1  # the render thread (see the module docstring)
         self._runs = [run.tolist() for run in np.array_split(np.arange(physics.num_envs), count)]
         self._executors = [
             concurrent.futures.ThreadPoolExecutor(1, thread_name_prefix=f"gl_cameras_{i}")
@@ -170,7 +166,7 @@ class GLBatchCameras:
 
     @property
     def threads(self) -> int:
-        """The number of worker threads that hold rendering state (0 once closed)."""
+        """The number of render threads that hold rendering state: 1, 0 once closed."""
         return sum(worker is not None for worker in self._workers)
 
     def dtype(self, name: str) -> np.dtype:

@@ -159,8 +159,8 @@ def test_worlds_with_their_own_geom_colours_render_them_as_their_cpu_envs():
 def test_closing_the_env_releases_the_opengl_workers():
     env = manipulation_batch.load("reach_site_vision", 3, seed=0, device="cpu", threads=2)
     cameras = env.cameras
-    assert cameras.threads == 2
-    assert len(_gl_threads()) == 2
+    assert cameras.threads == 1  # one render thread, whatever the physics' threads
+    assert len(_gl_threads()) == 1
     env.reset()
     env.close()
     assert cameras.threads == 0
