@@ -35,16 +35,7 @@ from gymnasium.vector import AutoresetMode
 
 from composer.gym.sub_env_vector import SubEnvironmentError, SubEnvVectorEnv
 from composer.rl import _sub_env
-
-try:
-    from stable_baselines3.common.vec_env import VecEnv, VecMonitor
-except ImportError as error:
-    raise ImportError(
-        "composer.rl.sb3 needs Stable-Baselines3: pip install 'mujoco-composer[sb3]'. "
-        "On a machine without a CUDA GPU, install torch's CPU build first (pip install "
-        "torch --index-url https://download.pytorch.org/whl/cpu): the default torch "
-        "wheel is a CUDA build of several GB."
-    ) from error
+from composer.rl._sb3_import import VecEnv, VecMonitor
 
 __all__ = ["BACKENDS", "Sb3VecEnv", "make_vec_env"]
 

@@ -24,7 +24,7 @@ from gymnasium.vector import AutoresetMode
 
 from composer.batch.gym import BatchVectorEnv
 from composer.gym.spec_spaces import FlatObservations
-from composer.rl.sb3 import VecEnv
+from composer.rl._sb3_import import VecEnv
 
 __all__ = ["Sb3BatchVecEnv"]
 
