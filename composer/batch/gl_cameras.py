@@ -92,21 +92,20 @@ class _Worker:
         self.physics.free()
 
 
-def _close(executors: list[concurrent.futures.ThreadPoolExecutor], workers: list) -> None:
-    """Closes each worker on its own thread, then ends the threads."""
+def _close(executor: concurrent.futures.ThreadPoolExecutor, workers: list) -> None:
+    """Closes the worker (if made) on the render thread, then ends the thread."""
     try:
-        futures = [e.submit(w.close) for e, w in zip(executors, workers) if w is not None]
+        future = executor.submit(workers[0].close) if workers else None
     except RuntimeError:
-        # The interpreter is exiting: the threads have stopped, and the contexts go with
+        # The interpreter is exiting: the thread has stopped, and the contexts go with
         # the process.
-        futures = []
+        future = None
     try:
-        for future in futures:
+        if future is not None:
             future.result()
     finally:
         workers.clear()
-        for executor in executors:
-            executor.shutdown(wait=True)
+        executor.shutdown(wait=True)
 
 
 class GLBatchCameras:
@@ -138,21 +137,18 @@ class GLBatchCameras:
             name: np.zeros((physics.num_envs, *spec.shape), spec.dtype)
             for name, spec in specs.items()
         }
-        count = 1  # the render thread (see the module docstring)
-        self._runs = [run.tolist() for run in np.array_split(np.arange(physics.num_envs), count)]
-        self._executors = [
-            concurrent.futures.ThreadPoolExecutor(1, thread_name_prefix=f"gl_cameras_{i}")
-            for i in range(count)
-        ]
-        self._workers: list[_Worker | None] = []
-        self._close = weakref.finalize(self, _close, self._executors, self._workers)
-        futures = [e.submit(_Worker, physics, self._observables) for e in self._executors]
-        concurrent.futures.wait(futures)
-        self._workers.extend(None if f.exception() else f.result() for f in futures)
-        error = next((f.exception() for f in futures if f.exception()), None)
-        if error is not None:
+        self._worlds = list(range(physics.num_envs))
+        # The render thread (see the module docstring), and its worker once made: empty
+        # before and after close.
+        self._executor = concurrent.futures.ThreadPoolExecutor(1, thread_name_prefix="gl_cameras")
+        self._worker: list[_Worker] = []
+        self._close = weakref.finalize(self, _close, self._executor, self._worker)
+        made = self._executor.submit(_Worker, physics, self._observables)
+        try:
+            self._worker.append(made.result())
+        except BaseException:
             self.close()
-            raise error
+            raise
 
     @property
     def camera_ids(self) -> tuple[int, ...]:
@@ -167,7 +163,7 @@ class GLBatchCameras:
     @property
     def threads(self) -> int:
         """The number of render threads that hold rendering state: 1, 0 once closed."""
-        return sum(worker is not None for worker in self._workers)
+        return len(self._worker)
 
     def dtype(self, name: str) -> np.dtype:
         """The NumPy dtype of the observable `name`'s images."""
@@ -182,12 +178,8 @@ class GLBatchCameras:
         if not self.threads:
             raise RuntimeError("GLBatchCameras.render: the cameras were closed (close())")
         refresh = self._contexts_vary()
-        futures = [
-            executor.submit(worker.render, run, self._outputs, refresh)
-            for executor, worker, run in zip(self._executors, self._workers, self._runs)
-        ]
-        for future in futures:
-            future.result()
+        worker = self._worker[0]
+        self._executor.submit(worker.render, self._worlds, self._outputs, refresh).result()
 
     def _contexts_vary(self) -> bool:
         """Whether the batch has per-world rows of a field render contexts copy when made
@@ -200,6 +192,6 @@ class GLBatchCameras:
         return {name: (lambda view=view: view) for name, view in self._outputs.items()}
 
     def close(self) -> None:
-        """Releases every worker's OpenGL contexts, on its own thread, and ends the
-        threads. Safe to call twice."""
+        """Releases the OpenGL contexts, on the render thread, and ends the thread. Safe
+        to call twice."""
         self._close()
