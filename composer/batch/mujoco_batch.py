@@ -233,10 +233,13 @@ class MujocoBatchPhysics(BatchFields):
 
     def contacts(self, world: int) -> Contacts:
         """The `Contacts` of world `world` (a copy of its MjData's; see `ContactWatch`)."""
+        return Contacts(geom=self._world_data(world).contact.geom.copy())
+
+    def _world_data(self, world: int) -> mujoco.MjData:
+        """World `world`'s MjData, copied into one MjData kept for such reads."""
         if self._one_world is None:
             self._one_world = mujoco.MjData(self.mj_model)
-        data = self.batch.get_data(world, self._one_world)
-        return Contacts(geom=data.contact.geom.copy())
+        return self.batch.get_data(world, self._one_world)
 
     def contact_watch(self, first_geoms: np.ndarray, second_geoms: np.ndarray) -> ContactWatch:
         """A `ContactWatch` for contacts between a geom of `first_geoms` and one of
@@ -267,9 +270,7 @@ class MujocoBatchPhysics(BatchFields):
     def _divergence(self, world: int) -> Divergence:
         """The `Divergence` of `world`, naming the warnings it raised: MuJoCo's reset
         zeroed its counters before counting the warning that caused it."""
-        if self._one_world is None:
-            self._one_world = mujoco.MjData(self.mj_model)
-        counts = self.batch.get_data(world, self._one_world).warning.number
+        counts = self._world_data(world).warning.number
         message = engine.invalid_state_message(np.zeros_like(counts), counts)
         return Divergence(world, message or "Physics state is invalid (MuJoCo reset it)")
 
