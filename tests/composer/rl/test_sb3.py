@@ -24,6 +24,7 @@ from stable_baselines3.common.env_checker import check_env  # noqa: E402
 from stable_baselines3.common.evaluation import evaluate_policy  # noqa: E402
 from stable_baselines3.common.monitor import Monitor  # noqa: E402
 from stable_baselines3.common.vec_env import DummyVecEnv, VecMonitor, VecNormalize  # noqa: E402
+from vec_env_checks import assert_observations_equal  # noqa: E402
 
 import composer  # noqa: E402
 import manipulation  # noqa: E402, F401  (registers the composer/<name>-v0 ids)
@@ -118,15 +119,6 @@ def _rows(observation, i):
     return observation[i]
 
 
-def _assert_equal(actual, expected):
-    if isinstance(expected, dict):
-        assert actual.keys() == expected.keys()
-        for key in expected:
-            np.testing.assert_array_equal(actual[key], expected[key], err_msg=key)
-    else:
-        np.testing.assert_array_equal(actual, expected)
-
-
 @pytest.fixture
 def closing():
     """Returns `keep(venv)`, which closes it after the test (its worker threads too)."""
@@ -166,19 +158,19 @@ def test_matches_sb3_dummy_vec_env_step_for_step(closing):
         reference = DummyVecEnv([factory] * 2)
         venv = closing(make_vec_env(factory, 2, seed=3, monitor=False))
         reference.seed(3)
-        _assert_equal(venv.reset(), reference.reset())
+        assert_observations_equal(venv.reset(), reference.reset())
         for action in _actions(venv.action_space, 12):
             actions = np.stack([action, -action])
             got = venv.step(actions)
             expected = reference.step(actions)
-            _assert_equal(got[0], expected[0])
+            assert_observations_equal(got[0], expected[0])
             np.testing.assert_array_equal(got[1], expected[1])
             np.testing.assert_array_equal(got[2], expected[2])
             for info, expected_info in zip(got[3], expected[3]):
                 assert info.keys() == expected_info.keys()
                 assert info["TimeLimit.truncated"] == expected_info["TimeLimit.truncated"]
                 if "terminal_observation" in expected_info:
-                    _assert_equal(
+                    assert_observations_equal(
                         info["terminal_observation"], expected_info["terminal_observation"]
                     )
         reference.close()
@@ -197,8 +189,8 @@ def test_terminal_observation_is_the_episodes_last_and_the_next_episode_starts()
         observations, _, dones, infos = venv.step(action[None])
     venv.close()
     assert dones.tolist() == [True]
-    _assert_equal(infos[0]["terminal_observation"], last)
-    _assert_equal(_rows(observations, 0), first_of_next)
+    assert_observations_equal(infos[0]["terminal_observation"], last)
+    assert_observations_equal(_rows(observations, 0), first_of_next)
 
 
 def test_time_limit_end_is_truncated_and_a_task_end_is_not(closing):
@@ -260,7 +252,7 @@ def test_seed_then_reset_seeds_sub_env_i_with_seed_plus_i(closing):
     assert venv.seed(7) == [7, 8]
     observations = venv.reset()
     for i, seed in enumerate((7, 8)):
-        _assert_equal(_rows(observations, i), _reach().reset(seed=seed)[0])
+        assert_observations_equal(_rows(observations, i), _reach().reset(seed=seed)[0])
 
 
 def test_attributes_and_methods_reach_only_the_chosen_sub_envs(closing):
@@ -270,7 +262,7 @@ def test_attributes_and_methods_reach_only_the_chosen_sub_envs(closing):
     with pytest.raises(AttributeError, match="note"):
         venv.get_attr("note", indices=[0])
     ((observation, info),) = venv.env_method("reset", seed=11, indices=2)
-    _assert_equal(observation, _reach().reset(seed=11)[0])
+    assert_observations_equal(observation, _reach().reset(seed=11)[0])
     assert venv.get_attr("render_mode") == [None, None, None]
 
 

@@ -17,6 +17,7 @@ pytest.importorskip(
 pytest.importorskip("mujoco.batch", reason="the CPU batch needs MuJoCo >= 4 (mujoco.batch)")
 
 from stable_baselines3 import PPO  # noqa: E402
+from vec_env_checks import assert_observations_equal  # noqa: E402
 
 import manipulation  # noqa: E402, F401  (registers the composer/<name>-v0 ids)
 from composer.rl.sb3 import make_vec_env  # noqa: E402
@@ -39,15 +40,6 @@ def _threaded(num_envs, **kwargs):
     )
 
 
-def _assert_equal(actual, expected):
-    if isinstance(expected, dict):
-        assert actual.keys() == expected.keys()
-        for key in expected:
-            np.testing.assert_array_equal(actual[key], expected[key], err_msg=key)
-    else:
-        np.testing.assert_array_equal(actual, expected)
-
-
 @pytest.mark.parametrize("flatten", [False, True])
 def test_matches_the_threaded_sb3_vec_env_step_for_step(flatten):
     batch, threaded = (
@@ -58,13 +50,13 @@ def test_matches_the_threaded_sb3_vec_env_step_for_step(flatten):
     if flatten:
         assert batch.observation_space.shape == (REACH_FEATURES,)
     try:
-        _assert_equal(batch.reset(), threaded.reset())
+        assert_observations_equal(batch.reset(), threaded.reset())
         rng = np.random.RandomState(0)
         ends = 0
         for _ in range(2 * EPISODE_STEPS + 2):
             actions = rng.uniform(-1, 1, (2, *batch.action_space.shape))
             got, expected = batch.step(actions), threaded.step(actions)
-            _assert_equal(got[0], expected[0])
+            assert_observations_equal(got[0], expected[0])
             np.testing.assert_array_equal(got[1], expected[1])
             assert got[1].dtype == np.float32
             np.testing.assert_array_equal(got[2], expected[2])
@@ -73,7 +65,7 @@ def test_matches_the_threaded_sb3_vec_env_step_for_step(flatten):
                 assert ("terminal_observation" in info) == ("terminal_observation" in expected_info)
                 if "terminal_observation" in info:
                     ends += 1
-                    _assert_equal(
+                    assert_observations_equal(
                         info["terminal_observation"], expected_info["terminal_observation"]
                     )
         assert ends == 4  # both worlds, at steps 5 and 10
