@@ -15,7 +15,8 @@ Gymnasium's `TimeLimit`, which `gymnasium.make` adds for it, ends it at that sam
 builds `make_vector_env(name, n, **kwargs)`: for the tasks of `manipulation.batch.BATCHED`
 (all 26) a `composer.batch.gym.BatchVectorEnv`, every world in one batch (the CPU batch on
 `mujoco.batch`, or MuJoCo Warp on a GPU; `device` chooses), unless an option of another
-backend is given; else, or with `backend='threads'`, a `composer.gym.ThreadedVectorEnv`, and
+backend is given (below MuJoCo 4.0, which has no `mujoco.batch`, only when a `device` is);
+else, or with `backend='threads'`, a `composer.gym.ThreadedVectorEnv`, and
 with `backend='ray'` a `composer.gym.RayVectorEnv`. (Gymnasium 1.x refuses `vector_kwargs`
 in this mode; the vector env's options go in `kwargs` with the sub-environments' ones.)
 """

@@ -4,6 +4,7 @@ import math
 import warnings
 
 import gymnasium
+import mujoco
 import numpy as np
 import pytest
 from gymnasium.utils.env_checker import check_env
@@ -16,6 +17,13 @@ from manipulation.tasks import registry
 
 # 10 s episodes of 0.04 s control steps (manipulation's module docstring).
 EPISODE_STEPS = 250
+
+# `mujoco.batch`, which the CPU batch runs on, came with MuJoCo 4.0; the version matrix runs
+# these tests on older releases too.
+HAS_MUJOCO_BATCH = int(mujoco.__version__.split(".")[0]) >= 4
+needs_mujoco_batch = pytest.mark.skipif(
+    not HAS_MUJOCO_BATCH, reason=f"mujoco {mujoco.__version__} has no mujoco.batch (from 4.0)"
+)
 
 
 def _output(result) -> str:
@@ -41,6 +49,7 @@ def test_make_builds_the_task_with_the_render_mode():
     env.close()
 
 
+@needs_mujoco_batch
 @pytest.mark.parametrize(
     "backend, vector_type",
     [(None, BatchVectorEnv), ("batch", BatchVectorEnv), ("threads", ThreadedVectorEnv)],
@@ -60,6 +69,18 @@ def test_make_vec_with_the_vector_entry_point_gives_the_batch_unless_told(backen
     assert observations["jaco_arm/joints_pos"].shape == (3, 6, 2)
     assert rewards.shape == (3,)
     envs.close()
+
+
+@pytest.mark.skipif(HAS_MUJOCO_BATCH, reason=f"mujoco {mujoco.__version__} has mujoco.batch")
+def test_below_mujoco_4_make_vec_gives_the_threaded_env_and_refuses_the_batch_by_name():
+    name = "composer/reach_site_features-v0"
+    envs = gymnasium.make_vec(name, num_envs=2, vectorization_mode="vector_entry_point")
+    assert type(envs) is ThreadedVectorEnv
+    envs.close()
+    with pytest.raises(ImportError, match=r"mujoco\.batch, which MuJoCo 3\.\d+\.\d+ does not"):
+        gymnasium.make_vec(
+            name, num_envs=2, vectorization_mode="vector_entry_point", backend="batch"
+        )
 
 
 def test_make_vec_passes_thread_count_and_autoreset_mode():
@@ -166,6 +187,7 @@ def test_plain_id_works_once_manipulation_is_imported_before_gymnasium(fresh_pyt
     assert _output(result) == "{'environment_name': 'reach_site_vision'}"
 
 
+@needs_mujoco_batch
 def test_the_batch_and_threaded_env_match_gymnasiums_sync_vector_env_step_for_step():
     # Sub-environment (or world) i is seeded with 4 + i in each.
     name = "composer/lift_brick_features-v0"
