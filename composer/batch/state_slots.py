@@ -45,12 +45,16 @@ class InitialStateStats(NamedTuple):
         producers' states had not been uploaded yet (see the module docstring).
       waits: refills at which the caller waited for the producers.
       wait_seconds: the time the caller spent waiting.
+      producer_cpu_seconds: the CPU time the producers spent making the states uploaded
+        so far, every worker's together (work beside the caller's, on other cores where
+        there are).
     """
 
     started: int
     reused: int
     waits: int
     wait_seconds: float
+    producer_cpu_seconds: float
 
 
 class StateSlots:
@@ -132,7 +136,7 @@ class StateSlots:
         self._steps = 0
         self._control_steps = 0  # since the last restart, for the warning's rates
         self._clear_bookkeeping()
-        self._stats = InitialStateStats(0, 0, 0, 0.0)
+        self._stats = InitialStateStats(0, 0, 0, 0.0, 0.0)
 
     def _host_backed(self, shape, dtype):
         """(device array, host array): the same memory on the CPU devices, a mirror on
@@ -171,7 +175,7 @@ class StateSlots:
             self._uploaded_on_device[...] = 0
         self._clear_bookkeeping()
         self._control_steps = 0
-        self._stats = InitialStateStats(0, 0, 0, 0.0)
+        self._stats = InitialStateStats(0, 0, 0, 0.0, 0.0)
 
     def sync_generators(self) -> None:
         """Sets each world's `random_states` entry to the state its worker process left it
@@ -349,6 +353,9 @@ class StateSlots:
                     f"workers: {sorted(produced.shared)} and {sorted(self._shared_written)}"
                 )
             self._generator_states.update(produced.generators)
+            self._stats = self._stats._replace(
+                producer_cpu_seconds=self._stats.producer_cpu_seconds + produced.cpu_seconds
+            )
             # One write per array for each share's states (rows are distinct: a job asks
             # for at most slots_per_world episodes of a world).
             rows = produced.worlds * k + produced.episodes % k

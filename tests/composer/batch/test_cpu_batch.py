@@ -8,6 +8,7 @@ and a half whole episodes of every task, in both autoreset modes.
 """
 
 import builtins
+import time
 
 import numpy as np
 import pytest
@@ -202,3 +203,27 @@ def test_the_batch_loads_as_manipulation_load_does():
     observation = env.reset().observation
     for key, value in cpu.reset().observation.items():
         np.testing.assert_array_equal(observation[key][0], value)
+
+
+class _SlowReach(Reach):
+    """Reach whose every episode start burns `BURN_SECONDS` of its thread's CPU time."""
+
+    BURN_SECONDS = 0.02
+
+    def initialize_episode(self, physics, random_state):
+        super().initialize_episode(physics, random_state)
+        end = time.thread_time() + self.BURN_SECONDS
+        while time.thread_time() < end:
+            pass
+
+
+def test_initial_state_stats_count_the_producers_cpu_time():
+    task = manipulation_batch.BatchReach(_SlowReach(observation_settings.FEATURES))
+    env = batch.BatchEnvironment(task, 2, random_state=3, device="cpu", slots_per_world=2)
+    process_cpu = time.process_time()
+    env.reset()  # fills both slots of both worlds, waiting for them
+    process_cpu = time.process_time() - process_cpu
+    produced = env.initial_state_stats().producer_cpu_seconds
+    env.close()
+    # 4 states of at least BURN_SECONDS each, made within this process's CPU time.
+    assert 4 * _SlowReach.BURN_SECONDS <= produced <= process_cpu
