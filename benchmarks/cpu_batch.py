@@ -15,9 +15,12 @@ at least one episode inside the timed window):
     2 and 4, and batch / it (skipped with --no-async).
 
 Then, from a run of the batch with its `StepClock`: the caller's serial CPU per world-step
-(everything outside `Batch.step`, producers included) as a share of one world's physics
-step on one thread, and the speed-up over one core that this serial share leaves possible
-at 16 and 64 cores (Amdahl: (s + p) / (s + p / cores)); the bytes per world (resident
+(everything outside the physics step, `MujocoBatchPhysics.step`, the producers' waits and
+uploads included) as a share of one world's physics step on one thread, and the speed-up
+over one core that this serial share leaves possible at 16 and 64 cores (Amdahl:
+(s + p) / (s + p / cores)); beside it, the initial-state producers' own CPU per world-step
+(`InitialStateStats.producer_cpu_seconds`: work on the producer thread, beside the caller's
+and the physics threads'), and the share of both together; the bytes per world (resident
 memory of a 4,096-world batch, over 4,096), and a few steps of 4,096 lift worlds.
 
 With `--threads 1,2,4,...`, a scaling table follows (alone with `--scaling-only`): for each
@@ -115,9 +118,10 @@ def _batch_env(task: str, n: int, threads: int | None = None, state_workers: int
     )
 
 
-def _batch_rate(env, steps: int, clock: StepClock | None = None) -> float:
+def _batch_rate(env, steps: int, clock: StepClock | None = None, reset: bool = True) -> float:
     actions = _actions(env.action_spec(), steps, env.num_envs, 2)
-    env.reset()
+    if reset:
+        env.reset()
     env.step_clock = clock
     start = time.perf_counter()
     for t in range(steps):
@@ -283,9 +287,13 @@ def _main_tables(args, sizes) -> None:
                 )
             )
             clock = StepClock(envs[n].synchronize)
-            _batch_rate(envs[n], steps, clock)
+            envs[n].reset()  # its states (every slot of every world) are not counted
+            before = envs[n].initial_state_stats().producer_cpu_seconds
+            _batch_rate(envs[n], steps, clock, reset=False)
+            produced = envs[n].initial_state_stats().producer_cpu_seconds - before
             total = sum(clock.seconds.values())
             serial_us = (total - clock.seconds["physics"]) / (clock.steps * n) * 1e6
+            producers_us = produced / (clock.steps * n) * 1e6
             share = serial_us / physics_us
             bound = [(1 + share) / (share + 1 / c) for c in (16, 64)]
             serial_rows.append(
@@ -293,8 +301,10 @@ def _main_tables(args, sizes) -> None:
                     task,
                     n,
                     f"{serial_us:.2f}",
+                    f"{producers_us:.2f}",
                     f"{physics_us:.1f}",
                     f"{100 * share:.2f}%",
+                    f"{100 * (serial_us + producers_us) / physics_us:.2f}%",
                     f"{bound[0]:.1f}x",
                     f"{bound[1]:.1f}x",
                 )
@@ -318,9 +328,23 @@ def _main_tables(args, sizes) -> None:
         ),
         rows,
     )
-    print("\nthe caller's serial CPU per world-step (outside Batch.step), us")
+    print(
+        "\nthe caller's serial CPU per world-step (outside the physics step), the producers' "
+        "CPU per world-step (beside it), us"
+    )
     _table(
-        ("task", "N", "serial", "1-thread physics", "share", "bound 16", "bound 64"), serial_rows
+        (
+            "task",
+            "N",
+            "serial",
+            "producers",
+            "1-thread physics",
+            "share",
+            "with producers",
+            "bound 16",
+            "bound 64",
+        ),
+        serial_rows,
     )
     if not args.no_large:
         before = _resident_bytes()
