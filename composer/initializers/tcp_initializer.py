@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import functools
+import weakref
 
 import mujoco
 import numpy as np
@@ -87,6 +88,9 @@ class ToolCenterPointInitializer(initializer.Initializer):
         self._ignore_collisions = ignore_collisions
         self._max_ik_attempts = max_ik_attempts
         self._max_rejection_samples = max_rejection_samples
+        # (weak reference to the model, joint names, geom groups) of the last model seen
+        # (see `_structure`).
+        self._cached_structure: tuple[weakref.ref, list[str], np.ndarray] | None = None
 
     def initialize_episode(self, physics, random_state) -> None:
         """Sets the arm's joints (see the class docstring)."""
@@ -103,10 +107,10 @@ class ToolCenterPointInitializer(initializer.Initializer):
           EpisodeInitializationError: If no sampled pose had an acceptable IK solution.
         """
         site = self._hand.tool_center_point if self._hand is not None else self._arm.wrist_site
-        joint_names = [joint.full_identifier for joint in self._arm.joints]
         data = physics.data.ptr
-        joints = _ArmJoints(physics.model.ptr, joint_names)
-        geom_groups = self._geom_groups(physics.model.ptr)
+        model = physics.model.ptr
+        joint_names, geom_groups = self._structure(model)
+        joints = _ArmJoints(model, joint_names)
         initial_qpos = data.qpos[joints.qpos].copy()
         # A dm_control arm (`RobotArm`) places the site itself; others get the same method.
         set_site_to_xpos = getattr(self._arm, "set_site_to_xpos", None)
@@ -137,6 +141,21 @@ class ToolCenterPointInitializer(initializer.Initializer):
             )
             + f" (tool center point {site.full_identifier!r})"
         )
+
+    def _structure(self, model: mujoco.MjModel) -> tuple[list[str], np.ndarray]:
+        """The arm's joint names and each geom's group in `model`, worked out once per
+        compiled model: both follow from the model's tree, which only a recompile (a new
+        `MjModel`) changes. Joint ranges, which change in place, are read at every call."""
+        cached = self._cached_structure
+        if cached is None or cached[0]() is not model:
+            joint_names = [joint.full_identifier for joint in self._arm.joints]
+            cached = (weakref.ref(model), joint_names, self._geom_groups(model))
+            self._cached_structure = cached
+        return cached[1], cached[2]
+
+    def __getstate__(self) -> dict:
+        # A copy (copy.deepcopy) starts without the cache, which refers to a compiled model.
+        return {**self.__dict__, "_cached_structure": None}
 
     def _geom_groups(self, model: mujoco.MjModel) -> np.ndarray:
         """Returns each geom's group: _ARM, _HAND, _STATIC, or -1 for free-floating bodies."""

@@ -177,3 +177,23 @@ def test_without_a_hand_the_wrist_site_is_placed():
 def test_zero_attempts_are_rejected_at_construction():
     with pytest.raises(ValueError, match="max_ik_attempts and max_rejection_samples must be >= 1"):
         ToolCenterPointInitializer(None, None, position=[0, 0, 0], max_ik_attempts=0)
+
+
+def test_a_recompiled_model_with_a_new_obstacle_is_seen_by_an_initializer_used_before():
+    # The initializer works out the arm's geoms once per compiled model; adding a geom in
+    # front of the arm's shifts every geom id, and the obstacle must count from then on.
+    arena = composer.Arena()
+    arm, hand = _Arm(), _Hand()
+    arm.attach(hand, attach_site=arm.wrist_site)
+    arena.attach(arm)
+    positions = deterministic.Sequence([OBSTACLE_CENTRE, OBSTACLE_CENTRE, FREE_TARGET])
+    initializer = ToolCenterPointInitializer(hand, arm, position=positions)
+    physics = mjcf.Physics.from_mjcf_model(arena.mjcf_model)
+    initializer.initialize_episode(physics, np.random.RandomState(0))
+    np.testing.assert_allclose(_tcp_pose(physics, hand)[0], OBSTACLE_CENTRE, atol=1e-4)
+    arena.mjcf_model.worldbody.insert(
+        "geom", 0, name="obstacle", type="box", size=[0.1, 0.1, 0.1], pos=OBSTACLE_CENTRE
+    )
+    physics = mjcf.Physics.from_mjcf_model(arena.mjcf_model)
+    initializer.initialize_episode(physics, np.random.RandomState(0))
+    np.testing.assert_allclose(_tcp_pose(physics, hand)[0], FREE_TARGET, atol=1e-4)
