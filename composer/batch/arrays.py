@@ -35,7 +35,7 @@ from typing import Any
 
 import numpy as np
 
-__all__ = ["ARRAY_TYPES", "ArrayBridge", "array_library", "check_array_type"]
+__all__ = ["ARRAY_TYPES", "ArrayBridge", "array_library", "check_array_type", "numpy_namespace"]
 
 #: The values of `BatchEnvironment(array_type=...)`.
 ARRAY_TYPES = ("numpy", "warp", "torch", "jax")
@@ -70,6 +70,33 @@ def _import(name: str, purpose: str) -> ModuleType:
         raise ImportError(f"{purpose} needs {name} installed ({error})") from error
 
 
+#: The first NumPy whose own namespace follows the array API standard as task code uses it
+#: (`astype` with `copy` and `device`, `isdtype`, creation functions taking `device`).
+NUMPY_ARRAY_API = (2, 1)
+
+
+def numpy_namespace():
+    """The array-API namespace of NumPy task code: `array_api_compat`'s NumPy where that is
+    installed (the extras `[warp]` and `[test]` have it), else NumPy itself from 2.1 on, so
+    that the CPU batch needs nothing beyond the runtime dependencies.
+
+    Raises:
+      ImportError: for an older NumPy without `array-api-compat`, saying what to install.
+    """
+    try:
+        import array_api_compat
+    except ImportError:
+        version = tuple(int(part) for part in np.__version__.split(".")[:2])
+        if version >= NUMPY_ARRAY_API:
+            return np
+        raise ImportError(
+            f"batched task code runs in NumPy's array-API namespace, which NumPy "
+            f"{np.__version__} has only through array-api-compat: pip install "
+            f"'numpy>={NUMPY_ARRAY_API[0]}.{NUMPY_ARRAY_API[1]}' or array-api-compat"
+        ) from None
+    return array_api_compat.array_namespace(np.zeros(0))
+
+
 class ArrayBridge:
     """Views of Warp arrays in the task namespace `xp`, and conversions out of it.
 
@@ -81,7 +108,8 @@ class ArrayBridge:
         cannot be chosen on CUDA).
 
     Attributes:
-      xp: the array-API namespace of task code (`array_api_compat.numpy` or `.torch`).
+      xp: the array-API namespace of task code (`numpy_namespace()` or `array_api_compat`'s
+        torch).
       library: "numpy" or "torch", the library behind `xp`.
       xp_device: the batch's device as `xp` names it (for `xp.zeros(..., device=)`).
 
@@ -91,8 +119,6 @@ class ArrayBridge:
     """
 
     def __init__(self, warp, device, array_type: str, namespace: str | None = None):
-        import array_api_compat
-
         self._wp = warp
         self.device = device
         self._torch_stream = None
@@ -106,7 +132,7 @@ class ArrayBridge:
                     "(device='warp-cpu' or 'cuda:0')"
                 )
             self.library = "numpy"
-            self.xp = array_api_compat.array_namespace(np.zeros(0))
+            self.xp = numpy_namespace()
             self.xp_device = "cpu"
             if array_type == "jax":
                 _import("jax", "array_type='jax'")
@@ -122,6 +148,8 @@ class ArrayBridge:
         if self.library == "torch":
             purpose = "batched task code on CUDA" if device.is_cuda else "array_type='torch'"
             self._torch = _import("torch", purpose)
+            import array_api_compat
+
             self.xp = array_api_compat.array_namespace(self._torch.zeros(0))
             self.xp_device = self._torch.device(str(device))
             if device.is_cuda:
@@ -131,7 +159,7 @@ class ArrayBridge:
                 self._torch_stream = warp.stream_to_torch(warp.get_stream(device))
                 self.use_stream()
         else:
-            self.xp = array_api_compat.array_namespace(np.zeros(0))
+            self.xp = numpy_namespace()
             self.xp_device = "cpu"
         if array_type == "jax":
             _import("jax", "array_type='jax'")

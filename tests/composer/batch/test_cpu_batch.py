@@ -227,3 +227,33 @@ def test_initial_state_stats_count_the_producers_cpu_time():
     env.close()
     # 4 states of at least BURN_SECONDS each, made within this process's CPU time.
     assert 4 * _SlowReach.BURN_SECONDS <= produced <= process_cpu
+
+
+def test_the_cpu_batch_needs_no_extra_beyond_the_runtime_dependencies(fresh_python):
+    # array-api-compat comes with [warp] and [test] only; without it the CPU batch computes
+    # in NumPy's own namespace, with the same results.
+    result = fresh_python(
+        """
+        import sys
+        sys.modules["array_api_compat"] = None  # a plain `pip install` of the project
+        import numpy as np
+        import manipulation
+        from manipulation import batch
+        env = batch.load("lift_brick_features", 2, random_states=[5, 6], device="cpu")
+        cpus = [manipulation.load("lift_brick_features", seed=s) for s in (5, 6)]
+        step, cpu_steps = env.reset(), [cpu.reset() for cpu in cpus]
+        actions = np.random.RandomState(0).uniform(-0.5, 0.5, (30, 2, 9))
+        differences = 0
+        for action in actions:
+            for i, cpu_step in enumerate(cpu_steps):
+                for key, value in cpu_step.observation.items():
+                    differences += int(not np.array_equal(step.observation[key][i], value))
+                if cpu_step.reward is not None:
+                    differences += int(step.reward[i] != cpu_step.reward)
+            step = env.step(action)
+            cpu_steps = [cpu.step(a) for cpu, a in zip(cpus, action)]
+        print(type(env.xp).__name__, env.xp.__name__, differences)
+        """
+    )
+    assert result.returncode == 0, result.stderr
+    assert result.stdout.split() == ["module", "numpy", "0"]
