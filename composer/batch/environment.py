@@ -118,7 +118,19 @@ class _HostModel(NamedTuple):
     varied: dict[str, str]
 
 
-def _random_states(num_envs: int, random_state, random_states) -> list[np.random.RandomState]:
+def world_random_states(
+    num_envs: int,
+    random_state: int | np.random.RandomState | None,
+    random_states: Sequence[int | np.random.RandomState] | None,
+) -> list[np.random.RandomState]:
+    """Each world's random generator, by the batch's rule: `random_states` one per world
+    (ints seed new generators), else world i's generator is seeded with the i-th of
+    `num_envs` draws of `randint(2**31)` from `random_state` (an int seed, a generator or
+    None).
+
+    Raises:
+      ValueError: for `random_states` of another length than `num_envs`.
+    """
     if random_states is not None:
         if len(random_states) != num_envs:
             raise ValueError(
@@ -240,7 +252,7 @@ class BatchEnvironment:
         hooks = EnvironmentHooks(self._batch_task.task)
         self._refuse_what_a_batch_cannot_run(hooks)
         self._n_sub_steps = self._sub_steps_per_control_step(n_sub_steps)
-        self._random_states = _random_states(self.num_envs, random_state, random_states)
+        self._random_states = world_random_states(self.num_envs, random_state, random_states)
         host = self._compile_on_host(hooks)
         self._device = devices.resolve(device)
         if threads is not None and self._device.on_warp:
@@ -537,7 +549,7 @@ class BatchEnvironment:
         Raises:
           ValueError: for `random_states` of other than `num_envs` entries.
         """
-        self._random_states[:] = _random_states(self.num_envs, seed, random_states)
+        self._random_states[:] = world_random_states(self.num_envs, seed, random_states)
         if self._slots is not None:
             self._slots.restart(self._random_states)
         self._started = False
