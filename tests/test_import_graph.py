@@ -1,7 +1,8 @@
 """The packages import downwards only, and in no circle but the documented `mjcf.element` ring.
 
 Layers, lowest first: `mujoco_physics` (the engine), `mjcf` (models), `composer`
-(environments), `manipulation` (the task suite). The graph is read from the source (every
+(environments), `manipulation` (the task suite), `suite_batch` (dm_control's Control Suite
+batched). The graph is read from the source (every
 `import`, at module level or inside a function, except those under `if TYPE_CHECKING:`,
 which never run), so a lazy import up counts as much as a top-level one.
 """
@@ -14,7 +15,7 @@ from pathlib import Path
 import pytest
 
 _ROOT = Path(__file__).resolve().parent.parent
-_LAYERS = ("mujoco_physics", "mjcf", "composer", "manipulation")
+_LAYERS = ("mujoco_physics", "mjcf", "composer", "manipulation", "suite_batch")
 
 # The ring `mjcf/element.py` documents at its end: the modules its element classes delegate
 # to, imported after the classes, each importing `mjcf.element` back.

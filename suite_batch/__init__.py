@@ -1,0 +1,80 @@
+"""dm_control's Control Suite batched: many worlds of one suite task on `mujoco.batch`.
+
+`load(domain_name, task_name, num_envs)` mirrors `dm_control.suite.load` and returns a
+`SuiteBatchEnvironment` whose world i is, bit for bit, the episode of
+`suite.load(domain_name, task_name, task_kwargs={"random": seed_i})` (world i's seed by
+the batch's rule, `composer.batch.environment.world_random_states`). The suite's code and
+models come from the installed dm_control at run time, through this project's redirect;
+dm_control is not a dependency of this project (`pip install dm-control --no-deps`).
+
+Tasks with array code (`BATCHED`): cartpole's six tasks. Others raise NotImplementedError
+naming them.
+"""
+
+from collections.abc import Mapping, Sequence
+
+import numpy as np
+
+from composer.batch.environment import world_random_states
+from suite_batch import cartpole, loading, tasks
+from suite_batch.environment import SuiteBatchEnvironment
+
+__all__ = ["BATCHED", "SuiteBatchEnvironment", "load"]
+
+#: The domains whose tasks have array code, by the suite task classes they batch.
+BATCHED = {"cartpole": cartpole.BatchBalance}
+
+
+def load(
+    domain_name: str,
+    task_name: str,
+    num_envs: int,
+    *,
+    task_kwargs: Mapping | None = None,
+    environment_kwargs: Mapping | None = None,
+    seed: int | np.random.RandomState | None = None,
+    random_states: Sequence[int | np.random.RandomState] | None = None,
+    threads: int | None = None,
+) -> SuiteBatchEnvironment:
+    """`num_envs` worlds of the suite task `domain_name`-`task_name`, batched.
+
+    Args:
+      domain_name, task_name: as `suite.load`'s (a pair of `suite.ALL_TASKS`).
+      num_envs: the number of worlds (>= 1).
+      task_kwargs: as `suite.load`'s (`time_limit`, ...), without `random`: each world's
+        generator comes from `seed` or `random_states`.
+      environment_kwargs: as `suite.load`'s (`n_sub_steps`, `flat_observation`, ...).
+      seed: an int seed or generator from which each world's generator is seeded
+        (ignored when `random_states` is given).
+      random_states: one int seed or `np.random.RandomState` per world.
+      threads: the C threads that step the worlds (None: the cores this process may use).
+
+    Returns:
+      A `SuiteBatchEnvironment`.
+
+    Raises:
+      ImportError: without dm_control installed, saying what to install.
+      ValueError: for an unknown domain or task (naming the closest ones), a `random` in
+        `task_kwargs`, or a bad `num_envs`, `random_states` or `threads`.
+      NotImplementedError: for a task without array code yet.
+    """
+    suite = loading.import_suite()
+    loading.check_task_name(suite, domain_name, task_name)
+    if isinstance(num_envs, bool) or not isinstance(num_envs, (int, np.integer)) or num_envs < 1:
+        raise ValueError(f"num_envs: expected an integer >= 1, got {num_envs!r}")
+    task_kwargs = dict(task_kwargs or {})
+    if "random" in task_kwargs:
+        raise ValueError(
+            "task_kwargs: 'random' seeds one environment; pass seed= or random_states= (one "
+            "per world) instead"
+        )
+    env = suite.load(domain_name, task_name, task_kwargs, environment_kwargs)
+    batch_task_type = tasks.for_task(env.task)
+    if batch_task_type is None:
+        env.close()
+        raise NotImplementedError(
+            f"{domain_name}-{task_name} ({type(env.task).__qualname__}): no array code yet; "
+            f"batched domains: {', '.join(sorted(BATCHED))}"
+        )
+    generators = world_random_states(int(num_envs), seed, random_states)
+    return SuiteBatchEnvironment(env, batch_task_type, generators, threads=threads)

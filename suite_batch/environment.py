@@ -1,0 +1,218 @@
+"""`SuiteBatchEnvironment`: many worlds of one Control Suite task on `mujoco.batch`.
+
+Every control step is one `Batch.step` of every world (dm_control's legacy step: the
+physics sub-steps, then the position and velocity stages at the new state, which is what
+dm_control's `Physics.step` leaves), then the task's array code (`suite_batch.tasks`). An
+episode starts from the CPU task's own `initialize_episode`, run on the CPU environment's
+physics with the world's random generator, whose integration state (`mj_getState`,
+warm start included) is written into the world's row, followed by `mj_forward`, as
+dm_control's `reset_context` ends.
+"""
+
+from collections.abc import Sequence
+
+import dm_env
+import mujoco
+import numpy as np
+
+from composer.batch import BatchTimeStep, MujocoBatchPhysics, actions, arrays
+from composer.batch.variations import model_arrays
+from mujoco_physics.engine import PhysicsError
+from suite_batch.tasks import SuiteBatchTask
+
+__all__ = ["SuiteBatchEnvironment"]
+
+_STATE = mujoco.mjtState.mjSTATE_INTEGRATION
+_FIRST, _MID, _LAST = (int(t) for t in dm_env.StepType)
+
+
+class SuiteBatchEnvironment:
+    """`num_envs` worlds of the Control Suite task of `env`, stepped at once.
+
+    World i is the episode of the CPU environment seeded with `random_states[i]`
+    (`suite.load(domain, task, task_kwargs={"random": seed})`), bit for bit: every
+    observation, reward, discount and step type, over episodes and resets. A world's
+    episode ends (LAST) when its task terminates it or at the suite's time limit (discount
+    1 there, as dm_control's); the `step` after that starts its next episode (FIRST, reward
+    0, discount 1), as dm_control's `step` after LAST resets.
+
+    Made by `suite_batch.load`.
+
+    Args:
+      env: the CPU suite environment (a dm_control `control.Environment`): its model is
+        every world's, its task starts every world's episodes.
+      batch_task_type: the `SuiteBatchTask` of its task.
+      random_states: one `np.random.RandomState` per world.
+      threads: the C threads that step the worlds (None: the cores this process may use).
+
+    Raises:
+      ValueError: for bad `random_states` or `threads`.
+      NotImplementedError: for `legacy_step=False`, or a task with its own `before_step`
+        or `after_step`, which the array code does not cover yet.
+    """
+
+    def __init__(
+        self,
+        env,
+        batch_task_type: type[SuiteBatchTask],
+        random_states: Sequence[np.random.RandomState],
+        *,
+        threads: int | None = None,
+    ):
+        from dm_control.suite import base
+
+        host, task = env.physics, env.task
+        name = type(task).__qualname__
+        if not host.legacy_step:
+            raise NotImplementedError(
+                "environment_kwargs legacy_step=False: the batch steps as dm_control's legacy "
+                "step (the default)"
+            )
+        for hook in ("before_step", "after_step"):
+            if getattr(type(task), hook) is not getattr(base.Task, hook):
+                raise NotImplementedError(f"{name}.{hook}: not batched yet")
+        if not random_states:
+            raise ValueError("random_states: expected one generator per world, got none")
+        self.num_envs = len(random_states)
+        self._env, self._host, self._task = env, host, task
+        self._random_states = list(random_states)
+        self.physics = MujocoBatchPhysics(
+            host, self.num_envs, arrays=arrays.ArrayBridge.host("numpy"), threads=threads
+        )
+        self._batch_task = batch_task_type(task, host, self.physics)
+        # dm_control's control.Environment keeps these two as private attributes.
+        self._n_sub_steps = int(env._n_sub_steps)
+        self._step_limit = env._step_limit
+        self._flat_observation = bool(env._flat_observation)
+        self._action_shape = (self.num_envs, *env.action_spec().shape)
+        self._steps = np.zeros(self.num_envs, np.int64)
+        self._ended = np.zeros(self.num_envs, bool)
+        self._started = False
+        self._states = np.zeros((self.num_envs, self.physics.state_size))
+        self._pristine_model = model_arrays(host.model.ptr)
+
+    @property
+    def random_states(self) -> list[np.random.RandomState]:
+        """Each world's random generator, drawn from by its episode starts."""
+        return self._random_states
+
+    def action_spec(self):
+        """One world's action spec (the CPU environment's); actions are (num_envs, *shape)."""
+        return self._env.action_spec()
+
+    def observation_spec(self):
+        """One world's observation spec (the CPU environment's); observations have a leading
+        num_envs axis."""
+        return self._env.observation_spec()
+
+    def reset(self) -> BatchTimeStep:
+        """Starts an episode in every world.
+
+        Returns:
+          A `BatchTimeStep`: FIRST everywhere, reward 0, discount 1.
+        """
+        everything = np.ones(self.num_envs, bool)
+        self._start_episodes(everything)
+        self._ended[...] = False
+        self._started = True
+        return BatchTimeStep(
+            np.full(self.num_envs, _FIRST, np.int8),
+            np.zeros(self.num_envs),
+            np.ones(self.num_envs),
+            self._observation(),
+        )
+
+    def step(self, action) -> BatchTimeStep:
+        """Steps every world with its row of `action` (num_envs, *action_spec().shape).
+
+        Returns:
+          A `BatchTimeStep`: FIRST (reward 0, discount 1) for the worlds whose episode ended
+          at the last step, LAST for those whose episode ends at this one, MID elsewhere.
+
+        Raises:
+          ValueError: for an action of the wrong shape or with NaN or infinity; nothing is
+            stepped.
+          PhysicsError: naming the worlds whose state became invalid (dm_control's
+            `PhysicsError`); every world has been stepped: call `reset`.
+        """
+        checked = actions.check_action(
+            action,
+            self._action_shape,
+            self.physics.arrays,
+            check_values=False,
+            dtype=np.float64,
+        )
+        if not self._started:
+            return self.reset()
+        physics = self.physics
+        # The suite's `base.Task.before_step`: the action is the control.
+        physics.data.ctrl[...] = checked.reshape(self.num_envs, -1)
+        physics.step(self._n_sub_steps)
+        restarting = self._ended
+        diverged = [d for d in physics.last_divergences if not restarting[d.world]]
+        if diverged:
+            self._started = False
+            raise PhysicsError("; ".join(f"world {d.world}: {d.message}" for d in diverged))
+        if restarting.any():
+            self._start_episodes(restarting)
+        task = self._batch_task
+        reward = task.get_reward()
+        termination = task.get_termination()
+        steps = np.where(restarting, 0, self._steps + 1)
+        at_limit = steps >= self._step_limit
+        if termination is None:
+            ended = at_limit
+            discount = np.ones(self.num_envs)
+        else:
+            terminated = ~np.isnan(termination)
+            ended = at_limit | terminated
+            discount = np.where(at_limit | ~terminated, 1.0, termination)
+        ended &= ~restarting
+        step_type = np.where(restarting, _FIRST, np.where(ended, _LAST, _MID)).astype(np.int8)
+        reward = np.where(restarting, 0.0, reward)
+        discount = np.where(restarting, 1.0, discount)
+        self._steps, self._ended = steps, ended
+        return BatchTimeStep(step_type, reward, discount, self._observation())
+
+    def _observation(self) -> dict[str, np.ndarray]:
+        observation = self._batch_task.get_observation()
+        if not self._flat_observation:
+            return observation
+        # dm_control's `flatten_observation`: the values in order, under "observations".
+        rows = [np.reshape(value, (self.num_envs, -1)) for value in observation.values()]
+        return {"observations": np.concatenate(rows, axis=1)}
+
+    def _start_episodes(self, mask: np.ndarray) -> None:
+        """Starts an episode in the worlds of `mask` with the CPU task's own start."""
+        host, task = self._host, self._task
+        model, data = host.model.ptr, host.data.ptr
+        for world in np.flatnonzero(mask):
+            # dm_control's suite tasks draw from the generator they keep as `_random`.
+            task._random = self._random_states[world]
+            with host.reset_context():
+                task.initialize_episode(host)
+            self._check_model_unchanged()
+            mujoco.mj_getState(model, data, self._states[world], _STATE)
+        self.physics.set_state(self._states, mask)
+        self.physics.forward(mask)
+        self._steps[mask] = 0
+
+    def _check_model_unchanged(self) -> None:
+        """Refuses an episode start that changed the model: every world shares it."""
+        model = self._host.model.ptr
+        changed = [
+            name
+            for name, value in self._pristine_model.items()
+            if not np.array_equal(getattr(model, name), value, equal_nan=True)
+        ]
+        if changed:
+            raise NotImplementedError(
+                f"{type(self._task).__qualname__}.initialize_episode changed model fields "
+                f"{changed}, which every world shares: per-episode model changes are not "
+                "batched yet"
+            )
+
+    def close(self) -> None:
+        """Closes the CPU environment (dm_env's `close`); the worlds are freed with this
+        environment."""
+        self._env.close()
