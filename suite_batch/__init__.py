@@ -7,8 +7,8 @@ the batch's rule, `composer.batch.environment.world_random_states`). The suite's
 models come from the installed dm_control at run time, through this project's redirect;
 dm_control is not a dependency of this project (`pip install dm-control --no-deps`).
 
-Tasks with array code (`BATCHED`): cartpole's six tasks. Others raise NotImplementedError
-naming them.
+Tasks with array code (`BATCHED`): cartpole's six tasks and cheetah's run. Others raise
+NotImplementedError naming them.
 """
 
 from collections.abc import Mapping, Sequence
@@ -16,13 +16,13 @@ from collections.abc import Mapping, Sequence
 import numpy as np
 
 from composer.batch.environment import world_random_states
-from suite_batch import cartpole, loading, tasks
+from suite_batch import cartpole, cheetah, loading, tasks
 from suite_batch.environment import SuiteBatchEnvironment
 
 __all__ = ["BATCHED", "SuiteBatchEnvironment", "load"]
 
 #: The domains whose tasks have array code, by the suite task classes they batch.
-BATCHED = {"cartpole": cartpole.BatchBalance}
+BATCHED = {"cartpole": cartpole.BatchBalance, "cheetah": cheetah.BatchCheetah}
 
 
 def load(

@@ -1,4 +1,4 @@
-"""Cartpole batched: world i is dm_control's `suite.load(..., task_kwargs={"random": seed})`.
+"""The batched suite tasks: world i is dm_control's `suite.load(..., task_kwargs={"random": seed})`.
 
 Needs dm_control's suite (not a dependency of this project): CI runs these tests in the
 dm_control conformance harness's venv (dm_control 1.0.50 on the newest MuJoCo), where
@@ -35,8 +35,10 @@ CARTPOLE_TASKS = (
     "two_poles",
     "three_poles",
 )
+BATCHED_TASKS = [("cartpole", task) for task in CARTPOLE_TASKS] + [("cheetah", "run")]
 SEEDS = (3, 11, 12345)
-# 25 control steps an episode (0.01 s each): 60 steps cross two resets.
+# 25 control steps an episode (0.01 s each, cartpole's and cheetah's): 60 steps cross two
+# resets.
 SHORT = {"time_limit": 0.25}
 STEPS = 60
 
@@ -46,11 +48,11 @@ def suite():
     return loading.import_suite()
 
 
-def _differences(suite, task, *, environment_kwargs=None) -> list[str]:
+def _differences(suite, domain, task, *, environment_kwargs=None) -> list[str]:
     """Steps the batch and the CPU envs seeded alike with the same actions; returns every
     difference found, named by step, world and quantity."""
     batch = suite_batch.load(
-        "cartpole",
+        domain,
         task,
         len(SEEDS),
         task_kwargs=SHORT,
@@ -60,7 +62,7 @@ def _differences(suite, task, *, environment_kwargs=None) -> list[str]:
     )
     cpus = [
         suite.load(
-            "cartpole",
+            domain,
             task,
             task_kwargs={"random": seed, **SHORT},
             environment_kwargs=environment_kwargs,
@@ -107,13 +109,16 @@ def test_the_batch_has_every_cartpole_task_of_the_suite(suite):
     assert set(CARTPOLE_TASKS) == {task for domain, task in suite.ALL_TASKS if domain == "cartpole"}
 
 
-@pytest.mark.parametrize("task", CARTPOLE_TASKS)
-def test_every_world_is_dm_controls_episode_bit_for_bit_across_resets(suite, task):
-    assert _differences(suite, task) == []
+@pytest.mark.parametrize("domain, task", BATCHED_TASKS)
+def test_every_world_is_dm_controls_episode_bit_for_bit_across_resets(suite, domain, task):
+    assert _differences(suite, domain, task) == []
 
 
 def test_flat_observations_are_dm_controls(suite):
-    assert _differences(suite, "swingup", environment_kwargs={"flat_observation": True}) == []
+    assert (
+        _differences(suite, "cartpole", "swingup", environment_kwargs={"flat_observation": True})
+        == []
+    )
 
 
 def test_a_reward_one_ulp_off_is_found(suite, monkeypatch):
@@ -121,7 +126,7 @@ def test_a_reward_one_ulp_off_is_found(suite, monkeypatch):
     monkeypatch.setattr(
         cartpole.BatchBalance, "get_reward", lambda self: np.nextafter(original(self), np.inf)
     )
-    found = _differences(suite, "swingup")
+    found = _differences(suite, "cartpole", "swingup")
     assert found and all(difference.endswith("reward") for difference in found)
 
 
@@ -135,8 +140,8 @@ def test_unknown_names_are_told_the_closest_ones(suite):
 
 
 def test_a_task_without_array_code_is_named(suite):
-    with pytest.raises(NotImplementedError, match=r"cheetah-run \(Cheetah\): no array code yet"):
-        suite_batch.load("cheetah", "run", 2)
+    with pytest.raises(NotImplementedError, match=r"walker-walk \(PlanarWalker\): no array code"):
+        suite_batch.load("walker", "walk", 2)
 
 
 def test_a_seed_in_task_kwargs_is_refused_for_seed_or_random_states(suite):
