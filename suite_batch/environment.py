@@ -16,6 +16,7 @@ import mujoco
 import numpy as np
 
 from composer.batch import BatchTimeStep, MujocoBatchPhysics, actions, arrays
+from composer.batch.mujoco_batch import divergence_report
 from composer.batch.variations import model_arrays
 from mujoco_physics.engine import PhysicsError
 from suite_batch.tasks import SuiteBatchTask
@@ -152,7 +153,7 @@ class SuiteBatchEnvironment:
         diverged = [d for d in physics.last_divergences if not restarting[d.world]]
         if diverged:
             self._started = False
-            raise PhysicsError("; ".join(f"world {d.world}: {d.message}" for d in diverged))
+            raise PhysicsError(divergence_report(diverged))
         if restarting.any():
             self._start_episodes(restarting)
         task = self._batch_task

@@ -16,7 +16,7 @@ from composer import episode_end
 from composer.batch import _warp, actions, arrays, devices, refusals, variations
 from composer.batch import step_clock as clocks
 from composer.batch.initial_states import StateMaker, StateProducer
-from composer.batch.mujoco_batch import MujocoBatchPhysics, batch_model_fields
+from composer.batch.mujoco_batch import MujocoBatchPhysics, batch_model_fields, divergence_report
 from composer.batch.observables import BatchObservables
 from composer.batch.physics import BatchPhysics, device_model_fields
 from composer.batch.state_slots import InitialStateStats, StateSlots
@@ -740,7 +740,7 @@ class BatchEnvironment:
         found = [d for d in self._physics.last_divergences if not restarting[d.world]]
         if not found:
             return None
-        report = "; ".join(f"world {d.world}: {d.message}" for d in found)
+        report = divergence_report(found)
         if self._raise_exception_on_physics_error:
             raise mjcf.PhysicsError(report)
         logging.warning("Physics error, ending the episode of %s", report)

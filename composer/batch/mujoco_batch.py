@@ -29,7 +29,13 @@ from composer.batch.arrays import ArrayBridge
 from composer.batch.bindings import BatchFields, FieldStorage
 from mujoco_physics import engine, field_layout
 
-__all__ = ["Divergence", "MujocoBatchPhysics", "batch_model_fields", "require_mujoco_batch"]
+__all__ = [
+    "Divergence",
+    "MujocoBatchPhysics",
+    "batch_model_fields",
+    "divergence_report",
+    "require_mujoco_batch",
+]
 
 _STATE_SPEC = mujoco.mjtState.mjSTATE_INTEGRATION
 _VEL_STAGE = int(mujoco.mjtStage.mjSTAGE_VEL)
@@ -88,6 +94,12 @@ class Divergence(NamedTuple):
 
     world: int
     message: str
+
+
+def divergence_report(divergences: Sequence[Divergence]) -> str:
+    """The worlds of `divergences` with their messages, as a `PhysicsError` names them
+    ("world 3: Physics state is invalid. ...; world 7: ...")."""
+    return "; ".join(f"world {d.world}: {d.message}" for d in divergences)
 
 
 class ContactWatch:
