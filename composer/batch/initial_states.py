@@ -41,6 +41,7 @@ __all__ = [
     "StateMaker",
     "StateProducer",
     "Submitted",
+    "run_jobs",
 ]
 
 _STATE_SPEC = mujoco.mjtState.mjSTATE_INTEGRATION
@@ -195,31 +196,45 @@ class StateMaker:
 
     def run(self, jobs: Sequence[Job]) -> ProducedStates:
         """The states of every episode of `jobs`, in order, stacked (at least one state)."""
-        begin = time.thread_time()
-        worlds, episodes, states, generators = [], [], [], []
-        for job in jobs:
-            random_state = job.random_state
-            if not isinstance(random_state, np.random.RandomState):
-                if self._scratch_generator is None:
-                    self._scratch_generator = np.random.RandomState()
-                random_state = self._scratch_generator
-                random_state.set_state(job.random_state)
-            for episode in job.episodes:
-                states.append(self(random_state))
-                worlds.append(job.world)
-                episodes.append(episode)
-            if random_state is not job.random_state:
-                generators.append((job.world, random_state.get_state()))
-        return ProducedStates(
-            worlds=np.asarray(worlds, np.int64),
-            episodes=np.asarray(episodes, np.int64),
-            state=np.stack([state.state for state in states]),
-            model_rows=_stacked([state.model_rows for state in states]),
-            values=_stacked([state.values for state in states]),
-            shared=states[0].shared,
-            generators=generators,
-            cpu_seconds=time.thread_time() - begin,
-        )
+        if self._scratch_generator is None:
+            self._scratch_generator = np.random.RandomState()
+        return run_jobs(self, jobs, self._scratch_generator)
+
+
+def run_jobs(
+    make_state: Callable[[np.random.RandomState], InitialState],
+    jobs: Sequence[Job],
+    scratch_generator: np.random.RandomState,
+) -> ProducedStates:
+    """The states `make_state` makes for every episode of `jobs`, in order, stacked (at
+    least one state): what a producer's worker runs, whatever makes one state.
+
+    A job that carries a generator's state (from a worker process) is drawn from
+    `scratch_generator`, set to it, and its state after comes back in `generators`.
+    """
+    begin = time.thread_time()
+    worlds, episodes, states, generators = [], [], [], []
+    for job in jobs:
+        random_state = job.random_state
+        if not isinstance(random_state, np.random.RandomState):
+            random_state = scratch_generator
+            random_state.set_state(job.random_state)
+        for episode in job.episodes:
+            states.append(make_state(random_state))
+            worlds.append(job.world)
+            episodes.append(episode)
+        if random_state is not job.random_state:
+            generators.append((job.world, random_state.get_state()))
+    return ProducedStates(
+        worlds=np.asarray(worlds, np.int64),
+        episodes=np.asarray(episodes, np.int64),
+        state=np.stack([state.state for state in states]),
+        model_rows=_stacked([state.model_rows for state in states]),
+        values=_stacked([state.values for state in states]),
+        shared=states[0].shared,
+        generators=generators,
+        cpu_seconds=time.thread_time() - begin,
+    )
 
 
 def _stacked(rows: list[dict[str, np.ndarray]]) -> dict[str, np.ndarray]:
