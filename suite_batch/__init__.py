@@ -7,22 +7,28 @@ the batch's rule, `composer.batch.environment.world_random_states`). The suite's
 models come from the installed dm_control at run time, through this project's redirect;
 dm_control is not a dependency of this project (`pip install dm-control --no-deps`).
 
-Tasks with array code (`BATCHED`): cartpole's six tasks and cheetah's run. Others raise
-NotImplementedError naming them.
+The array code lives in `suite_batch.domains`, one module per domain (`BATCHED` lists the
+suite task classes it covers); a task without it raises NotImplementedError naming it.
 """
 
+import importlib
+import pkgutil
 from collections.abc import Mapping, Sequence
 
 import numpy as np
 
 from composer.batch.environment import world_random_states
-from suite_batch import cartpole, cheetah, loading, tasks
+from suite_batch import domains, loading, tasks
 from suite_batch.environment import SuiteBatchEnvironment
 
 __all__ = ["BATCHED", "SuiteBatchEnvironment", "load"]
 
-#: The domains whose tasks have array code, by the suite task classes they batch.
-BATCHED = {"cartpole": cartpole.BatchBalance, "cheetah": cheetah.BatchCheetah}
+for _module in pkgutil.iter_modules(domains.__path__):
+    importlib.import_module(f"{domains.__name__}.{_module.name}")
+
+#: The suite task classes with array code ("dm_control.suite.cartpole.Balance"), each
+#: with its `SuiteBatchTask`.
+BATCHED: Mapping[str, type[tasks.SuiteBatchTask]] = tasks.registered()
 
 
 def load(
@@ -35,6 +41,8 @@ def load(
     seed: int | np.random.RandomState | None = None,
     random_states: Sequence[int | np.random.RandomState] | None = None,
     threads: int | None = None,
+    slots_per_world: int = 3,
+    refill_interval: int = 8,
 ) -> SuiteBatchEnvironment:
     """`num_envs` worlds of the suite task `domain_name`-`task_name`, batched.
 
@@ -48,6 +56,8 @@ def load(
         (ignored when `random_states` is given).
       random_states: one int seed or `np.random.RandomState` per world.
       threads: the C threads that step the worlds (None: the cores this process may use).
+      slots_per_world, refill_interval: how far ahead the producer thread makes episode
+        starts, as in `SuiteBatchEnvironment`.
 
     Returns:
       A `SuiteBatchEnvironment`.
@@ -55,8 +65,10 @@ def load(
     Raises:
       ImportError: without dm_control installed, saying what to install.
       ValueError: for an unknown domain or task (naming the closest ones), a `random` in
-        `task_kwargs`, or a bad `num_envs`, `random_states` or `threads`.
-      NotImplementedError: for a task without array code yet.
+        `task_kwargs`, or a bad `num_envs`, `random_states`, `threads`, `slots_per_world`
+        or `refill_interval`.
+      NotImplementedError: for a task without array code yet, or one whose episode starts
+        vary a model field the batch cannot give each world.
     """
     suite = loading.import_suite()
     loading.check_task_name(suite, domain_name, task_name)
@@ -74,7 +86,14 @@ def load(
         env.close()
         raise NotImplementedError(
             f"{domain_name}-{task_name} ({type(env.task).__qualname__}): no array code yet; "
-            f"batched domains: {', '.join(sorted(BATCHED))}"
+            f"batched domains: {', '.join(tasks.batched_domains())}"
         )
     generators = world_random_states(int(num_envs), seed, random_states)
-    return SuiteBatchEnvironment(env, batch_task_type, generators, threads=threads)
+    return SuiteBatchEnvironment(
+        env,
+        batch_task_type,
+        generators,
+        threads=threads,
+        slots_per_world=slots_per_world,
+        refill_interval=refill_interval,
+    )

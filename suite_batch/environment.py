@@ -3,27 +3,28 @@
 Every control step is one `Batch.step` of every world (dm_control's legacy step: the
 physics sub-steps, then the position and velocity stages at the new state, which is what
 dm_control's `Physics.step` leaves), then the task's array code (`suite_batch.tasks`). An
-episode starts from the CPU task's own `initialize_episode`, run on the CPU environment's
-physics with the world's random generator, whose integration state (`mj_getState`,
-warm start included) is written into the world's row, followed by `mj_forward`, as
-dm_control's `reset_context` ends.
+episode starts from the CPU task's own `initialize_episode`, run ahead of time by a
+producer thread on the CPU environment's physics with the world's random generator
+(`suite_batch.episode_starts`); its integration state (`mj_getState`, warm start
+included) and its rows of the model fields the episodes vary are written into the world's
+rows, followed by `mj_forward`, as dm_control's `reset_context` ends.
 """
 
 from collections.abc import Sequence
 
 import dm_env
-import mujoco
 import numpy as np
 
 from composer.batch import BatchTimeStep, MujocoBatchPhysics, actions, arrays
+from composer.batch.initial_states import StateProducer
 from composer.batch.mujoco_batch import divergence_report
-from composer.batch.variations import model_arrays
+from composer.batch.state_slots import InitialStateStats, StateSlots
 from mujoco_physics.engine import PhysicsError
+from suite_batch.episode_starts import SuiteStateMaker, varied_model_fields
 from suite_batch.tasks import SuiteBatchTask
 
 __all__ = ["SuiteBatchEnvironment"]
 
-_STATE = mujoco.mjtState.mjSTATE_INTEGRATION
 _FIRST, _MID, _LAST = (int(t) for t in dm_env.StepType)
 
 
@@ -45,11 +46,15 @@ class SuiteBatchEnvironment:
       batch_task_type: the `SuiteBatchTask` of its task.
       random_states: one `np.random.RandomState` per world.
       threads: the C threads that step the worlds (None: the cores this process may use).
+      slots_per_world: episode starts made ahead per world (>= 1), by one producer thread.
+      refill_interval: control steps between two requests for more starts (>= 1).
 
     Raises:
-      ValueError: for bad `random_states` or `threads`.
-      NotImplementedError: for `legacy_step=False`, or a task with its own `before_step`
-        or `after_step`, which the array code does not cover yet.
+      ValueError: for bad `random_states`, `threads`, `slots_per_world` or
+        `refill_interval`.
+      NotImplementedError: for `legacy_step=False`, a task with its own `before_step` or
+        `after_step`, which the array code does not cover yet, or episode starts that vary
+        a model field the batch cannot give each world (`varied_model_fields`).
     """
 
     def __init__(
@@ -59,6 +64,8 @@ class SuiteBatchEnvironment:
         random_states: Sequence[np.random.RandomState],
         *,
         threads: int | None = None,
+        slots_per_world: int = 3,
+        refill_interval: int = 8,
     ):
         from dm_control.suite import base
 
@@ -74,13 +81,34 @@ class SuiteBatchEnvironment:
                 raise NotImplementedError(f"{name}.{hook}: not batched yet")
         if not random_states:
             raise ValueError("random_states: expected one generator per world, got none")
+        for argument, value in (
+            ("slots_per_world", slots_per_world),
+            ("refill_interval", refill_interval),
+        ):
+            if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < 1:
+                raise ValueError(f"{argument}: expected an integer >= 1, got {value!r}")
         self.num_envs = len(random_states)
-        self._env, self._host, self._task = env, host, task
+        self._env = env
         self._random_states = list(random_states)
+        model_fields = varied_model_fields(task, host)
         self.physics = MujocoBatchPhysics(
-            host, self.num_envs, arrays=arrays.ArrayBridge.host("numpy"), threads=threads
+            host,
+            self.num_envs,
+            arrays=arrays.ArrayBridge.host("numpy"),
+            batched_model_fields=model_fields,
+            threads=threads,
         )
         self._batch_task = batch_task_type(task, host, self.physics)
+        maker = SuiteStateMaker(task, host, self._batch_task, model_fields)
+        self._slots = StateSlots(
+            self.physics,
+            StateProducer(maker),
+            self._random_states,
+            model_fields=model_fields,
+            slots_per_world=slots_per_world,
+            refill_interval=refill_interval,
+        )
+        self._batch_task.episode_values = self._slots.values
         # dm_control's control.Environment keeps these two as private attributes.
         self._n_sub_steps = int(env._n_sub_steps)
         self._step_limit = env._step_limit
@@ -89,13 +117,16 @@ class SuiteBatchEnvironment:
         self._steps = np.zeros(self.num_envs, np.int64)
         self._ended = np.zeros(self.num_envs, bool)
         self._started = False
-        self._states = np.zeros((self.num_envs, self.physics.state_size))
-        self._pristine_model = model_arrays(host.model.ptr)
 
     @property
     def random_states(self) -> list[np.random.RandomState]:
-        """Each world's random generator, drawn from by its episode starts."""
+        """Each world's random generator, drawn from by its episode starts (on the producer
+        thread, up to `slots_per_world` episodes ahead of the world)."""
         return self._random_states
+
+    def initial_state_stats(self) -> InitialStateStats:
+        """How the producer kept up with the episode starts (`InitialStateStats`)."""
+        return self._slots.stats
 
     def action_spec(self):
         """One world's action spec (the CPU environment's); actions are (num_envs, *shape)."""
@@ -112,6 +143,7 @@ class SuiteBatchEnvironment:
         Returns:
           A `BatchTimeStep`: FIRST everywhere, reward 0, discount 1.
         """
+        self._slots.refill(wait=True)
         everything = np.ones(self.num_envs, bool)
         self._start_episodes(everything)
         self._ended[...] = False
@@ -173,6 +205,7 @@ class SuiteBatchEnvironment:
         reward = np.where(restarting, 0.0, reward)
         discount = np.where(restarting, 1.0, discount)
         self._steps, self._ended = steps, ended
+        self._slots.after_step()
         return BatchTimeStep(step_type, reward, discount, self._observation())
 
     def _observation(self) -> dict[str, np.ndarray]:
@@ -184,36 +217,13 @@ class SuiteBatchEnvironment:
         return {"observations": np.concatenate(rows, axis=1)}
 
     def _start_episodes(self, mask: np.ndarray) -> None:
-        """Starts an episode in the worlds of `mask` with the CPU task's own start."""
-        host, task = self._host, self._task
-        model, data = host.model.ptr, host.data.ptr
-        for world in np.flatnonzero(mask):
-            # dm_control's suite tasks draw from the generator they keep as `_random`.
-            task._random = self._random_states[world]
-            with host.reset_context():
-                task.initialize_episode(host)
-            self._check_model_unchanged()
-            mujoco.mj_getState(model, data, self._states[world], _STATE)
-        self.physics.set_state(self._states, mask)
+        """Starts the next episode of the worlds of `mask` from their prepared starts."""
+        self._slots.apply(mask)
         self.physics.forward(mask)
         self._steps[mask] = 0
 
-    def _check_model_unchanged(self) -> None:
-        """Refuses an episode start that changed the model: every world shares it."""
-        model = self._host.model.ptr
-        changed = [
-            name
-            for name, value in self._pristine_model.items()
-            if not np.array_equal(getattr(model, name), value, equal_nan=True)
-        ]
-        if changed:
-            raise NotImplementedError(
-                f"{type(self._task).__qualname__}.initialize_episode changed model fields "
-                f"{changed}, which every world shares: per-episode model changes are not "
-                "batched yet"
-            )
-
     def close(self) -> None:
-        """Closes the CPU environment (dm_env's `close`); the worlds are freed with this
-        environment."""
+        """Stops the producer and closes the CPU environment (dm_env's `close`); the worlds
+        are freed with this environment."""
+        self._slots.close()
         self._env.close()

@@ -7,11 +7,16 @@ Python, so that world i equals the CPU task's episode bit for bit. Episode start
 CPU task's own `initialize_episode` (see `suite_batch.environment`).
 """
 
+from collections.abc import Mapping
+from types import MappingProxyType
 from typing import Any
 
 import numpy as np
 
-__all__ = ["SuiteBatchTask", "for_task", "register"]
+__all__ = ["SuiteBatchTask", "batched_domains", "for_task", "register", "registered"]
+
+#: The module of dm_control's suite, whose task classes are registered by full name.
+_SUITE_PACKAGE = "dm_control.suite."
 
 
 class SuiteBatchTask:
@@ -20,16 +25,30 @@ class SuiteBatchTask:
     Args:
       task: the CPU suite task (a `dm_control.suite.base.Task`), whose parameters (sparse
         rewards, swing-up, ...) the array code follows.
-      host: the CPU task's physics (names and model constants; its data is a scratch
-        world's).
+      host: the CPU task's physics, for names and model constants, read in `__init__`
+        only: a producer thread starts episodes on it (its data, and the model fields the
+        episodes vary, change there).
       physics: the `composer.batch.MujocoBatchPhysics` of the worlds; `physics.data.<field>`
-        is a (num_envs, ...) view.
+        is a (num_envs, ...) view, and so is `physics.model.<field>` for the model fields
+        the episodes vary (`physics.batched_model_fields`).
+
+    Attributes:
+      episode_values: the current episode's `initial_values` of every world, by name,
+        float64 (num_envs, *value shape), set by the environment.
     """
 
     def __init__(self, task, host, physics):
         self.task = task
         self.host = host
         self.physics = physics
+        self.episode_values: dict[str, np.ndarray] = {}
+
+    def initial_values(self) -> dict[str, np.ndarray]:
+        """What the CPU task keeps from its `initialize_episode` for the rest of the episode
+        (a target drawn there, ...), read from `self.task` right after a start, by name;
+        none by default. Each world's values of its current episode are then in
+        `episode_values`. Runs on a producer thread: read only `self.task`."""
+        return {}
 
     def get_observation(self) -> dict[str, np.ndarray]:
         """Every world's observation: name -> float64 (num_envs, *the CPU task's shape),
@@ -67,3 +86,14 @@ def register(task_type_name: str, batch_task_type: type[SuiteBatchTask]) -> None
 def for_task(task: Any) -> type[SuiteBatchTask] | None:
     """The registered batched version of `task`'s class, or None."""
     return _REGISTRY.get(_key(type(task)))
+
+
+def registered() -> Mapping[str, type[SuiteBatchTask]]:
+    """A read-only view of the registry: suite task class name -> its `SuiteBatchTask`."""
+    return MappingProxyType(_REGISTRY)
+
+
+def batched_domains() -> list[str]:
+    """The suite domains with a registered task, sorted ("cartpole" for
+    "dm_control.suite.cartpole.Balance")."""
+    return sorted({name.removeprefix(_SUITE_PACKAGE).split(".")[0] for name in _REGISTRY})

@@ -3,8 +3,7 @@
 import mujoco
 import numpy as np
 
-from composer.utils import rewards
-from suite_batch import tasks
+from suite_batch import rewards, tasks
 
 # Entries of a row-major 3x3 orientation matrix, as dm_control names its xmat columns.
 _ZZ, _XZ = 8, 2
@@ -44,16 +43,19 @@ class BatchBalance(tasks.SuiteBatchTask):
     def get_reward(self) -> np.ndarray:
         cart, cosines = self._cart_position(), self._pole_angle_cosines()
         if self._sparse:
-            cart_in_bounds = rewards.tolerance(cart, self._cart_range)
-            angle_in_bounds = rewards.tolerance(cosines, self._angle_cosine_range).prod(axis=1)
+            cart_in_bounds = rewards.tolerance(cart, self._cart_range, scalar=True)
+            angle_in_bounds = rewards.tolerance(
+                cosines, self._angle_cosine_range, scalar=False
+            ).prod(axis=1)
             return cart_in_bounds * angle_in_bounds
         upright = (cosines + 1) / 2
-        centered = (1 + rewards.tolerance(cart, margin=2)) / 2
+        # The cart's position is one number on the CPU, the rest arrays.
+        centered = (1 + rewards.tolerance(cart, margin=2, scalar=True)) / 2
         small_control = rewards.tolerance(
-            self._ctrl, margin=1, value_at_margin=0, sigmoid="quadratic"
+            self._ctrl, margin=1, value_at_margin=0, sigmoid="quadratic", scalar=False
         )[:, 0]
         small_control = (4 + small_control) / 5
-        small_velocity = rewards.tolerance(self._qvel[:, 1:], margin=5).min(axis=1)
+        small_velocity = rewards.tolerance(self._qvel[:, 1:], margin=5, scalar=False).min(axis=1)
         small_velocity = (1 + small_velocity) / 2
         return upright.mean(axis=1) * small_control * small_velocity * centered
 

@@ -5,8 +5,7 @@ import sys
 import mujoco
 import numpy as np
 
-from composer.utils import rewards
-from suite_batch import tasks
+from suite_batch import rewards, tasks
 
 
 class BatchCheetah(tasks.SuiteBatchTask):
@@ -33,6 +32,7 @@ class BatchCheetah(tasks.SuiteBatchTask):
             margin=self._run_speed,
             value_at_margin=0,
             sigmoid="linear",
+            scalar=True,
         )
 
 
