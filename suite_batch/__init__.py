@@ -18,8 +18,10 @@ from collections.abc import Mapping, Sequence
 import numpy as np
 
 from composer.batch.environment import world_random_states
+from composer.batch.variations import PROBE_SEEDS
 from suite_batch import domains, loading, tasks
 from suite_batch.environment import SuiteBatchEnvironment
+from suite_batch.episode_starts import seeded_model_fields
 
 __all__ = ["BATCHED", "SuiteBatchEnvironment", "load"]
 
@@ -89,10 +91,28 @@ def load(
             f"batched domains: {', '.join(tasks.batched_domains())}"
         )
     generators = world_random_states(int(num_envs), seed, random_states)
+
+    def seeded(random_state):
+        return suite.load(
+            domain_name, task_name, {**task_kwargs, "random": random_state}, environment_kwargs
+        )
+
+    # A task whose model is drawn from its seed (lqr's) compiles differently per seed: each
+    # world then starts on its own CPU environment, and gets its row of those fields.
+    probe = seeded(np.random.RandomState(PROBE_SEEDS[0]))
+    try:
+        seeded_fields = seeded_model_fields(
+            env.physics.model.ptr, probe.physics.model.ptr, f"{domain_name}-{task_name}"
+        )
+    finally:
+        probe.close()
+    world_envs = [seeded(generator) for generator in generators] if seeded_fields else None
     return SuiteBatchEnvironment(
         env,
         batch_task_type,
         generators,
+        world_envs=world_envs,
+        seeded_fields=seeded_fields,
         threads=threads,
         slots_per_world=slots_per_world,
         refill_interval=refill_interval,

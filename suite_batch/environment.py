@@ -20,7 +20,7 @@ from composer.batch.initial_states import StateProducer
 from composer.batch.mujoco_batch import divergence_report
 from composer.batch.state_slots import InitialStateStats, StateSlots
 from mujoco_physics.engine import PhysicsError
-from suite_batch.episode_starts import SuiteStateMaker, varied_model_fields
+from suite_batch.episode_starts import StartHost, SuiteStateMaker, varied_model_fields
 from suite_batch.tasks import SuiteBatchTask
 
 __all__ = ["SuiteBatchEnvironment"]
@@ -45,6 +45,11 @@ class SuiteBatchEnvironment:
         every world's, its task starts every world's episodes.
       batch_task_type: the `SuiteBatchTask` of its task.
       random_states: one `np.random.RandomState` per world.
+      world_envs: for a task whose model is drawn from the seed (lqr's), world i's own
+        CPU environment, loaded with `random_states[i]`, on which its episodes start;
+        `env` is then only the template of the batch's model.
+      seeded_fields: the model fields in which the `world_envs`' models differ
+        (`episode_starts.seeded_model_fields`): each world gets its row of them.
       threads: the C threads that step the worlds (None: the cores this process may use).
       slots_per_world: episode starts made ahead per world (>= 1), by one producer thread.
       refill_interval: control steps between two requests for more starts (>= 1).
@@ -53,8 +58,9 @@ class SuiteBatchEnvironment:
       ValueError: for bad `random_states`, `threads`, `slots_per_world` or
         `refill_interval`.
       NotImplementedError: for `legacy_step=False`, a task with its own `before_step` or
-        `after_step`, which the array code does not cover yet, or episode starts that vary
-        a model field the batch cannot give each world (`varied_model_fields`).
+        `after_step`, which the array code does not cover yet, episode starts that vary
+        a model field the batch cannot give each world (`varied_model_fields`), or a task
+        with `world_envs` that keeps values from its starts (`initial_values`).
     """
 
     def __init__(
@@ -63,6 +69,8 @@ class SuiteBatchEnvironment:
         batch_task_type: type[SuiteBatchTask],
         random_states: Sequence[np.random.RandomState],
         *,
+        world_envs: Sequence | None = None,
+        seeded_fields: Sequence[str] = (),
         threads: int | None = None,
         slots_per_world: int = 3,
         refill_interval: int = 8,
@@ -90,7 +98,20 @@ class SuiteBatchEnvironment:
         self.num_envs = len(random_states)
         self._env = env
         self._random_states = list(random_states)
-        model_fields = varied_model_fields(task, host)
+        self._world_envs = list(world_envs or ())
+        if self._world_envs and len(self._world_envs) != self.num_envs:
+            raise ValueError(
+                f"world_envs: expected one environment per world ({self.num_envs}), got "
+                f"{len(self._world_envs)}"
+            )
+        if self._world_envs and (
+            batch_task_type.initial_values is not SuiteBatchTask.initial_values
+        ):
+            raise NotImplementedError(
+                f"{batch_task_type.__name__}: a task whose model is drawn from the seed keeps "
+                "no values from its starts yet (initial_values)"
+            )
+        model_fields = tuple(sorted({*varied_model_fields(task, host), *seeded_fields}))
         self.physics = MujocoBatchPhysics(
             host,
             self.num_envs,
@@ -99,7 +120,11 @@ class SuiteBatchEnvironment:
             threads=threads,
         )
         self._batch_task = batch_task_type(task, host, self.physics)
-        maker = SuiteStateMaker(task, host, self._batch_task, model_fields)
+        start_hosts = [
+            StartHost(world_env.task, world_env.physics)
+            for world_env in (self._world_envs or [env])
+        ]
+        maker = SuiteStateMaker(start_hosts, self._batch_task, model_fields)
         self._slots = StateSlots(
             self.physics,
             StateProducer(maker),
@@ -226,4 +251,5 @@ class SuiteBatchEnvironment:
         """Stops the producer and closes the CPU environment (dm_env's `close`); the worlds
         are freed with this environment."""
         self._slots.close()
-        self._env.close()
+        for env in (self._env, *self._world_envs):
+            env.close()

@@ -10,6 +10,8 @@ import difflib
 import importlib.util
 from types import ModuleType
 
+import numpy as np
+
 from composer import dm_control_compat
 
 __all__ = ["check_task_name", "import_suite"]
@@ -22,7 +24,8 @@ def import_suite() -> ModuleType:
     """Returns `dm_control.suite`, imported through this project's redirect.
 
     Raises:
-      ImportError: when dm_control is not installed, saying what to install.
+      ImportError: when dm_control is not installed, saying what to install, or NumPy is
+        older than 2.0.
       RuntimeError: when dm_control's own engine was imported before the redirect (from
         `dm_control_compat.install`, naming the modules).
     """
@@ -34,6 +37,11 @@ def import_suite() -> ModuleType:
         raise ImportError(
             f"the batched Control Suite runs dm_control's own suite, which is not installed: "
             f"{INSTALL_HINT}"
+        )
+    if not hasattr(np, "vecdot"):
+        # The array code matches the suite's np.dot and np.linalg.norm row by row with it.
+        raise ImportError(
+            f"the batched Control Suite needs NumPy >= 2.0 (np.vecdot); found {np.__version__}"
         )
     dm_control_compat.install()
     from dm_control import suite

@@ -198,16 +198,21 @@ class StateMaker:
         """The states of every episode of `jobs`, in order, stacked (at least one state)."""
         if self._scratch_generator is None:
             self._scratch_generator = np.random.RandomState()
-        return run_jobs(self, jobs, self._scratch_generator)
+        return run_jobs(self._make, jobs, self._scratch_generator)
+
+    def _make(self, world: int, random_state: np.random.RandomState) -> InitialState:
+        # One maker serves every world: they share its task and model.
+        return self(random_state)
 
 
 def run_jobs(
-    make_state: Callable[[np.random.RandomState], InitialState],
+    make_state: Callable[[int, np.random.RandomState], InitialState],
     jobs: Sequence[Job],
     scratch_generator: np.random.RandomState,
 ) -> ProducedStates:
-    """The states `make_state` makes for every episode of `jobs`, in order, stacked (at
-    least one state): what a producer's worker runs, whatever makes one state.
+    """The states `make_state(world, random_state)` makes for every episode of `jobs`, in
+    order, stacked (at least one state): what a producer's worker runs, whatever makes one
+    state.
 
     A job that carries a generator's state (from a worker process) is drawn from
     `scratch_generator`, set to it, and its state after comes back in `generators`.
@@ -220,7 +225,7 @@ def run_jobs(
             random_state = scratch_generator
             random_state.set_state(job.random_state)
         for episode in job.episodes:
-            states.append(make_state(random_state))
+            states.append(make_state(job.world, random_state))
             worlds.append(job.world)
             episodes.append(episode)
         if random_state is not job.random_state:
