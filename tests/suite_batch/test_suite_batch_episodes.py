@@ -30,31 +30,13 @@ BATCHED_TASKS = [("cartpole", task) for task in CARTPOLE_TASKS] + [
 
 #: The tasks of `suite.ALL_TASKS` without array code yet: each must still be refused.
 NOT_YET_BATCHED = {
-    ("acrobot", "swingup"),
-    ("acrobot", "swingup_sparse"),
-    ("ball_in_cup", "catch"),
     *(("dog", task) for task in ("stand", "walk", "trot", "run", "fetch")),
-    ("finger", "spin"),
-    ("finger", "turn_easy"),
-    ("finger", "turn_hard"),
-    ("fish", "upright"),
-    ("fish", "swim"),
-    ("hopper", "stand"),
-    ("hopper", "hop"),
-    *(("humanoid", task) for task in ("stand", "walk", "run", "run_pure_state")),
-    *(("humanoid_CMU", task) for task in ("stand", "walk", "run")),
-    ("lqr", "lqr_2_1"),
-    ("lqr", "lqr_6_2"),
     *(("manipulator", task) for task in ("bring_ball", "bring_peg", "insert_ball", "insert_peg")),
-    ("pendulum", "swingup"),
-    ("point_mass", "easy"),
-    ("point_mass", "hard"),
-    *(("quadruped", task) for task in ("walk", "run", "escape", "fetch")),
+    # Its terrain is drawn into hfield_data per episode, which mujoco.batch cannot give
+    # each world its own copy of (tests/suite_batch/test_quadruped.py).
+    ("quadruped", "escape"),
     ("stacker", "stack_2"),
     ("stacker", "stack_4"),
-    ("swimmer", "swimmer6"),
-    ("swimmer", "swimmer15"),
-    *(("walker", task) for task in ("stand", "walk", "run")),
 }
 
 
@@ -117,8 +99,8 @@ def test_unknown_names_are_told_the_closest_ones(suite):
 
 
 def test_a_task_without_array_code_is_named(suite):
-    with pytest.raises(NotImplementedError, match=r"walker-walk \(PlanarWalker\): no array code"):
-        suite_batch.load("walker", "walk", 2)
+    with pytest.raises(NotImplementedError, match=r"quadruped-escape \(Escape\): no array code"):
+        suite_batch.load("quadruped", "escape", 2)
 
 
 def test_a_seed_in_task_kwargs_is_refused_for_seed_or_random_states(suite):
