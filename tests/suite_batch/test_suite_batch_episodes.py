@@ -31,12 +31,9 @@ BATCHED_TASKS = [("cartpole", task) for task in CARTPOLE_TASKS] + [
 #: The tasks of `suite.ALL_TASKS` without array code yet: each must still be refused.
 NOT_YET_BATCHED = {
     *(("dog", task) for task in ("stand", "walk", "trot", "run", "fetch")),
-    *(("manipulator", task) for task in ("bring_ball", "bring_peg", "insert_ball", "insert_peg")),
     # Its terrain is drawn into hfield_data per episode, which mujoco.batch cannot give
     # each world its own copy of (tests/suite_batch/test_quadruped.py).
     ("quadruped", "escape"),
-    ("stacker", "stack_2"),
-    ("stacker", "stack_4"),
 }
 
 
