@@ -7,19 +7,23 @@ episode starts from the CPU task's own `initialize_episode`, run ahead of time b
 producer thread on the CPU environment's physics with the world's random generator
 (`suite_batch.episode_starts`); its integration state (`mj_getState`, warm start
 included) and its rows of the model fields the episodes vary are written into the world's
-rows, followed by `mj_forward`, as dm_control's `reset_context` ends.
+rows, followed by `mj_forward` with actuation disabled, as dm_control's `reset_context`
+ends.
 """
 
+import logging
 from collections.abc import Sequence
 
 import dm_env
 import numpy as np
 
+from composer import episode_end
 from composer.batch import BatchTimeStep, MujocoBatchPhysics, actions, arrays
+from composer.batch.environment import AUTORESET_MODES, world_random_states
 from composer.batch.initial_states import StateProducer
 from composer.batch.mujoco_batch import divergence_report
 from composer.batch.state_slots import InitialStateStats, StateSlots
-from mujoco_physics.engine import PhysicsError
+from composer.episode_end import Autoreset, EpisodeEnds
 from suite_batch.episode_starts import StartHost, SuiteStateMaker, varied_model_fields
 from suite_batch.tasks import SuiteBatchTask
 
@@ -35,8 +39,17 @@ class SuiteBatchEnvironment:
     (`suite.load(domain, task, task_kwargs={"random": seed})`), bit for bit: every
     observation, reward, discount and step type, over episodes and resets. A world's
     episode ends (LAST) when its task terminates it or at the suite's time limit (discount
-    1 there, as dm_control's); the `step` after that starts its next episode (FIRST, reward
-    0, discount 1), as dm_control's `step` after LAST resets.
+    1 there, as dm_control's). A world whose state becomes invalid (NaN, infinite or huge,
+    which MuJoCo answers by resetting it) ends its episode with reward 0 and discount 0,
+    logged with a warning naming it, where dm_control's environment raises its
+    `PhysicsError`; the other worlds go on.
+
+    Autoreset follows `composer.episode_end`: under "next_step" (the default) the `step`
+    after a world's LAST starts its next episode (FIRST, reward 0, discount 1), as
+    dm_control's `step` after LAST resets; under "same_step" (Stable-Baselines3's and
+    rsl_rl's) the `step` that ends an episode returns LAST with that episode's reward and
+    discount and the next episode's first observation (dm_control's `reset` after it),
+    the ended episode's last observation being `final_observation`.
 
     Made by `suite_batch.load`.
 
@@ -51,6 +64,7 @@ class SuiteBatchEnvironment:
       seeded_fields: the model fields in which the `world_envs`' models differ
         (`episode_starts.seeded_model_fields`): each world gets its row of them.
       threads: the C threads that step the worlds (None: the cores this process may use).
+      autoreset_mode: "next_step" (dm_env's order, the default) or "same_step" (above).
       slots_per_world: episode starts made ahead per world (>= 1), by one producer thread.
       refill_interval: control steps between two requests for more starts (>= 1).
 
@@ -72,6 +86,7 @@ class SuiteBatchEnvironment:
         world_envs: Sequence | None = None,
         seeded_fields: Sequence[str] = (),
         threads: int | None = None,
+        autoreset_mode: str = "next_step",
         slots_per_world: int = 3,
         refill_interval: int = 8,
     ):
@@ -89,6 +104,12 @@ class SuiteBatchEnvironment:
                 raise NotImplementedError(f"{name}.{hook}: not batched yet")
         if not random_states:
             raise ValueError("random_states: expected one generator per world, got none")
+        if autoreset_mode not in AUTORESET_MODES:
+            raise ValueError(
+                f"autoreset_mode: expected one of {list(AUTORESET_MODES)}, got {autoreset_mode!r}"
+            )
+        self.autoreset_mode = autoreset_mode
+        self._autoreset = Autoreset.of(autoreset_mode)
         for argument, value in (
             ("slots_per_world", slots_per_world),
             ("refill_interval", refill_interval),
@@ -141,6 +162,8 @@ class SuiteBatchEnvironment:
         self._action_shape = (self.num_envs, *env.action_spec().shape)
         self._steps = np.zeros(self.num_envs, np.int64)
         self._ended = np.zeros(self.num_envs, bool)
+        self._discount = np.ones(self.num_envs)
+        self._final_observation: dict[str, np.ndarray] = {}
         self._started = False
 
     @property
@@ -162,6 +185,46 @@ class SuiteBatchEnvironment:
         num_envs axis."""
         return self._env.observation_spec()
 
+    @property
+    def final_observation(self) -> dict[str, np.ndarray]:
+        """With autoreset "same_step": the last observation of the episodes that ended at
+        the last step (other worlds' rows are that step's observation)."""
+        return self._final_observation
+
+    def episode_ends(self) -> EpisodeEnds:
+        """How the last step ended each world's episode, as Gymnasium says it
+        (`composer.episode_end`): `terminated` where the task ended it (discount 0),
+        `truncated` where the time limit did; bool (num_envs,)."""
+        return episode_end.episode_ends(self._ended, self._discount)
+
+    def hand_out(self, value: np.ndarray) -> np.ndarray:
+        """`value` as `step` hands arrays out: NumPy, as is."""
+        return value
+
+    def reseed(
+        self,
+        seed: int | np.random.RandomState | None = None,
+        *,
+        random_states: Sequence[int | np.random.RandomState] | None = None,
+    ) -> None:
+        """Reseeds every world's generator, as `suite_batch.load` seeds them: from `seed`,
+        or world i from `random_states[i]`; the next `step` or `reset` starts every world's
+        episode anew.
+
+        Raises:
+          ValueError: for `random_states` of other than `num_envs` entries.
+          NotImplementedError: for a task whose model is drawn from the seed (lqr's): its
+            worlds' models were compiled from their first generators; load it anew.
+        """
+        if self._world_envs:
+            raise NotImplementedError(
+                f"reseed: {type(self._env.task).__qualname__}'s model is drawn from each "
+                "world's seed when it is loaded; call suite_batch.load with the new seeds"
+            )
+        self._random_states[:] = world_random_states(self.num_envs, seed, random_states)
+        self._slots.restart(self._random_states)
+        self._started = False
+
     def reset(self) -> BatchTimeStep:
         """Starts an episode in every world.
 
@@ -171,27 +234,30 @@ class SuiteBatchEnvironment:
         self._slots.refill(wait=True)
         everything = np.ones(self.num_envs, bool)
         self._start_episodes(everything)
-        self._ended[...] = False
+        self._steps = np.zeros(self.num_envs, np.int64)
+        self._ended = np.zeros(self.num_envs, bool)
+        self._discount = np.ones(self.num_envs)
         self._started = True
+        observation = self._observation()
+        self._final_observation = observation
         return BatchTimeStep(
             np.full(self.num_envs, _FIRST, np.int8),
             np.zeros(self.num_envs),
             np.ones(self.num_envs),
-            self._observation(),
+            observation,
         )
 
     def step(self, action) -> BatchTimeStep:
         """Steps every world with its row of `action` (num_envs, *action_spec().shape).
 
         Returns:
-          A `BatchTimeStep`: FIRST (reward 0, discount 1) for the worlds whose episode ended
-          at the last step, LAST for those whose episode ends at this one, MID elsewhere.
+          A `BatchTimeStep`: LAST for the worlds whose episode ends at this step; under
+          "next_step", FIRST (reward 0, discount 1) for those whose episode ended at the
+          last step; MID elsewhere.
 
         Raises:
           ValueError: for an action of the wrong shape or with NaN or infinity; nothing is
             stepped.
-          PhysicsError: naming the worlds whose state became invalid (dm_control's
-            `PhysicsError`); every world has been stepped: call `reset`.
         """
         checked = actions.check_action(
             action,
@@ -202,21 +268,21 @@ class SuiteBatchEnvironment:
         )
         if not self._started:
             return self.reset()
-        physics = self.physics
+        physics, autoreset = self.physics, self._autoreset
         # The suite's `base.Task.before_step`: the action is the control.
         physics.data.ctrl[...] = checked.reshape(self.num_envs, -1)
         physics.step(self._n_sub_steps)
-        restarting = self._ended
-        diverged = [d for d in physics.last_divergences if not restarting[d.world]]
-        if diverged:
-            self._started = False
-            raise PhysicsError(divergence_report(diverged))
+        restarting = autoreset.resets_before_step(self._ended)
+        diverged = self._diverged_worlds(restarting)
         if restarting.any():
+            # These worlds were stepped with the others; their start overwrites that step.
             self._start_episodes(restarting)
         task = self._batch_task
         reward = task.get_reward()
         termination = task.get_termination()
         steps = np.where(restarting, 0, self._steps + 1)
+        # dm_control's order: the time limit ends an episode with discount 1, else the
+        # task's termination with its discount.
         at_limit = steps >= self._step_limit
         if termination is None:
             ended = at_limit
@@ -225,13 +291,42 @@ class SuiteBatchEnvironment:
             terminated = ~np.isnan(termination)
             ended = at_limit | terminated
             discount = np.where(at_limit | ~terminated, 1.0, termination)
+        if diverged is not None:
+            # As dm_control's PhysicsError ends the episode: discount 0.
+            reward = np.where(diverged, 0.0, reward)
+            discount = np.where(diverged, 0.0, discount)
+            ended = ended | diverged
         ended &= ~restarting
         step_type = np.where(restarting, _FIRST, np.where(ended, _LAST, _MID)).astype(np.int8)
         reward = np.where(restarting, 0.0, reward)
         discount = np.where(restarting, 1.0, discount)
-        self._steps, self._ended = steps, ended
+        observation = self._observation()
+        if autoreset is Autoreset.SAME_STEP:
+            self._final_observation = observation
+            if ended.any():
+                self._start_episodes(ended)
+                fresh = self._observation()
+                observation = {
+                    key: np.where(ended.reshape(-1, *[1] * (value.ndim - 1)), fresh[key], value)
+                    for key, value in observation.items()
+                }
+            steps = np.where(ended, 0, steps)
+        self._steps, self._ended, self._discount = steps, ended, discount
         self._slots.after_step()
-        return BatchTimeStep(step_type, reward, discount, self._observation())
+        return BatchTimeStep(step_type, reward, discount, observation)
+
+    def _diverged_worlds(self, restarting: np.ndarray) -> np.ndarray | None:
+        """The worlds whose state became invalid in the last physics step (MuJoCo reset
+        them) and whose episode this step ends, a bool (num_envs,) mask, logged with a
+        warning naming them; None for none. A world restarting at this step is overwritten
+        by its start."""
+        found = [d for d in self.physics.last_divergences if not restarting[d.world]]
+        if not found:
+            return None
+        logging.warning("Physics error, ending the episode of %s", divergence_report(found))
+        diverged = np.zeros(self.num_envs, bool)
+        diverged[[d.world for d in found]] = True
+        return diverged
 
     def _observation(self) -> dict[str, np.ndarray]:
         observation = self._batch_task.get_observation()
@@ -244,8 +339,9 @@ class SuiteBatchEnvironment:
     def _start_episodes(self, mask: np.ndarray) -> None:
         """Starts the next episode of the worlds of `mask` from their prepared starts."""
         self._slots.apply(mask)
-        self.physics.forward(mask)
-        self._steps[mask] = 0
+        # dm_control's `reset_context` ends with a forward pass with actuation disabled:
+        # activation actuators (dog's) read differently in the first step's sensors.
+        self.physics.forward(mask, actuation=False)
 
     def close(self) -> None:
         """Stops the producer and closes the CPU environment (dm_env's `close`); the worlds
