@@ -43,6 +43,7 @@ def load(
     seed: int | np.random.RandomState | None = None,
     random_states: Sequence[int | np.random.RandomState] | None = None,
     threads: int | None = None,
+    autoreset_mode: str = "next_step",
     slots_per_world: int = 3,
     refill_interval: int = 8,
 ) -> SuiteBatchEnvironment:
@@ -58,6 +59,7 @@ def load(
         (ignored when `random_states` is given).
       random_states: one int seed or `np.random.RandomState` per world.
       threads: the C threads that step the worlds (None: the cores this process may use).
+      autoreset_mode: "next_step" or "same_step", as in `SuiteBatchEnvironment`.
       slots_per_world, refill_interval: how far ahead the producer thread makes episode
         starts, as in `SuiteBatchEnvironment`.
 
@@ -67,8 +69,8 @@ def load(
     Raises:
       ImportError: without dm_control installed, saying what to install.
       ValueError: for an unknown domain or task (naming the closest ones), a `random` in
-        `task_kwargs`, or a bad `num_envs`, `random_states`, `threads`, `slots_per_world`
-        or `refill_interval`.
+        `task_kwargs`, or a bad `num_envs`, `random_states`, `threads`, `autoreset_mode`,
+        `slots_per_world` or `refill_interval`.
       NotImplementedError: for a task without array code yet, or one whose episode starts
         vary a model field the batch cannot give each world.
     """
@@ -114,6 +116,7 @@ def load(
         world_envs=world_envs,
         seeded_fields=seeded_fields,
         threads=threads,
+        autoreset_mode=autoreset_mode,
         slots_per_world=slots_per_world,
         refill_interval=refill_interval,
     )

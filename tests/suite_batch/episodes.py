@@ -39,6 +39,16 @@ def short_time_limit(suite, domain: str, task: str) -> float:
         env.close()
 
 
+def _observation_differences(where: str, got: dict, world: int, expected: dict) -> list[str]:
+    found = []
+    if got.keys() != expected.keys():
+        found.append(f"{where}: observation keys {list(got)}")
+    for key, value in expected.items():
+        if key not in got or not np.array_equal(got[key][world], value):
+            found.append(f"{where}: observation {key!r}")
+    return found
+
+
 def differences(
     suite,
     domain: str,
@@ -48,13 +58,17 @@ def differences(
     short: bool = True,
     environment_kwargs: dict | None = None,
     seeds: tuple[int, ...] = SEEDS,
+    autoreset_mode: str = "next_step",
 ) -> list[str]:
     """Steps a batch of `domain`-`task` and the CPU envs seeded alike with the same random
     actions for `steps` control steps; returns every difference found, named by step, world
     and quantity (step type, reward, discount, each observation, `qpos`, `qvel`), and "no
     episode restarted" when no world started a second episode.
 
-    `short`: episodes of `short_time_limit`; False: the task's own time limit.
+    `short`: episodes of `short_time_limit`; False: the task's own time limit. Under
+    `autoreset_mode="same_step"`, a CPU env is reset right after its LAST step, whose
+    observation is compared with the batch's `final_observation` and the reset's with the
+    batch's observation of that step.
     """
     limit = {"time_limit": short_time_limit(suite, domain, task)} if short else {}
     batch = suite_batch.load(
@@ -65,7 +79,9 @@ def differences(
         environment_kwargs=environment_kwargs,
         random_states=seeds,
         threads=1,
+        autoreset_mode=autoreset_mode,
     )
+    same_step = autoreset_mode == "same_step"
     cpus = [
         suite.load(
             domain,
@@ -95,13 +111,14 @@ def differences(
                 "discount": step.discount[world],
             }
             found += [f"{where}: {key}" for key in expected if got[key] != expected[key]]
-            if step.observation.keys() != cpu_step.observation.keys():
-                found.append(f"{where}: observation keys {list(step.observation)}")
-            for key, value in cpu_step.observation.items():
-                if key not in step.observation or not np.array_equal(
-                    step.observation[key][world], value
-                ):
-                    found.append(f"{where}: observation {key!r}")
+            observation = cpu_step.observation
+            if same_step and cpu_step.last():
+                found += _observation_differences(
+                    f"{where} (final)", batch.final_observation, world, observation
+                )
+                observation = cpu.reset().observation
+                restarted = True
+            found += _observation_differences(where, step.observation, world, observation)
             for field in ("qpos", "qvel"):
                 cpu_value = getattr(cpu.physics.data, field)
                 if not np.array_equal(getattr(batch.physics.data, field)[world], cpu_value):

@@ -30,7 +30,6 @@ BATCHED_TASKS = [("cartpole", task) for task in CARTPOLE_TASKS] + [
 
 #: The tasks of `suite.ALL_TASKS` without array code yet: each must still be refused.
 NOT_YET_BATCHED = {
-    *(("dog", task) for task in ("stand", "walk", "trot", "run", "fetch")),
     # Its terrain is drawn into hfield_data per episode, which mujoco.batch cannot give
     # each world its own copy of (tests/suite_batch/test_quadruped.py).
     ("quadruped", "escape"),
@@ -55,9 +54,15 @@ def test_every_world_is_dm_controls_episode_bit_for_bit_across_resets(suite, dom
     assert differences(suite, domain, task) == []
 
 
+@pytest.mark.parametrize("domain, task", BATCHED_TASKS)
+def test_same_step_autoreset_is_dm_controls_reset_after_last(suite, domain, task):
+    assert differences(suite, domain, task, autoreset_mode="same_step") == []
+
+
 @pytest.mark.suite_batch_episodes
+@pytest.mark.parametrize("autoreset_mode", ["next_step", "same_step"])
 @pytest.mark.parametrize("domain, task", _all_tasks())
-def test_whole_episodes_of_every_suite_task_are_dm_controls(suite, domain, task):
+def test_whole_episodes_of_every_suite_task_are_dm_controls(suite, domain, task, autoreset_mode):
     if (domain, task) in NOT_YET_BATCHED:
         with pytest.raises(NotImplementedError, match="no array code yet"):
             suite_batch.load(domain, task, 1)
@@ -66,7 +71,14 @@ def test_whole_episodes_of_every_suite_task_are_dm_controls(suite, domain, task)
     episode_steps = int(round(env._step_limit))  # dm_control's own step limit
     env.close()
     # Two whole episodes and a few steps of a third, at the task's own time limit.
-    found = differences(suite, domain, task, steps=2 * episode_steps + 3, short=False)
+    found = differences(
+        suite,
+        domain,
+        task,
+        steps=2 * episode_steps + 3,
+        short=False,
+        autoreset_mode=autoreset_mode,
+    )
     assert found[:10] == []
 
 
