@@ -65,7 +65,9 @@ README_EXAMPLE_TIMEOUT = 300
 # What dm_control's tests import beyond its own requirements; protobuf below 7, whose
 # FieldDescriptor no longer has the `label` that dm_control 1.0.50's mocap loader reads (its
 # tracking tests fail with protobuf 7 whatever serves composer).
-TEST_EXTRAS = ["mock", "pytest", "pytest-xdist", "pillow", "h5py", "protobuf<7"]
+# Gymnasium is for this project's tests of the batched Control Suite's Gymnasium ids
+# (tests/suite_batch), which run in this venv.
+TEST_EXTRAS = ["mock", "pytest", "pytest-xdist", "pillow", "h5py", "protobuf<7", "gymnasium"]
 
 #: dm_control packages whose test files are run: the three this project serves, and the
 #: packages built on them (entities of the manipulation suite, the Control Suite, its RL

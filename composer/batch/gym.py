@@ -15,18 +15,21 @@ name still works.
 """
 
 from collections.abc import Sequence
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 from gymnasium.spaces import Dict
 from gymnasium.vector import AutoresetMode, VectorEnv
 from gymnasium.vector.utils import batch_space
 
-from composer.batch.environment import AUTORESET_MODES, BatchEnvironment, BatchTimeStep
+from composer.batch.environment import AUTORESET_MODES, BatchTimeStep
 from composer.episode_end import Autoreset
 from composer.gym.spec_spaces import box_from_spec
 
-__all__ = ["BatchVectorEnv", "WarpVectorEnv", "autoreset_mode_name"]
+if TYPE_CHECKING:
+    from composer.batch.environment import BatchEnvironment
+
+__all__ = ["BATCH_INTERFACE", "BatchVectorEnv", "WarpVectorEnv", "autoreset_mode_name"]
 
 
 def autoreset_mode_name(mode) -> str:
@@ -43,11 +46,29 @@ def autoreset_mode_name(mode) -> str:
     return name
 
 
+#: What `BatchVectorEnv` uses of its environment: `BatchEnvironment`'s batch interface,
+#: which `suite_batch.SuiteBatchEnvironment` (dm_control's Control Suite batched) has too.
+BATCH_INTERFACE = (
+    "num_envs",
+    "autoreset_mode",
+    "observation_spec",
+    "action_spec",
+    "reseed",
+    "reset",
+    "step",
+    "episode_ends",
+    "final_observation",
+    "hand_out",
+    "close",
+)
+
+
 class BatchVectorEnv(VectorEnv):
     """The worlds of `env` as one Gymnasium vector env.
 
     Args:
-      env: the `BatchEnvironment` to run.
+      env: the `BatchEnvironment` to run, or another environment with its batch interface
+        (`BATCH_INTERFACE`), such as `suite_batch.SuiteBatchEnvironment`.
 
     `reset(seed=s)` seeds world i with `s + i` (or `s[i]` for a list of `num_envs` ints), as
     Gymnasium's vector envs and `composer.gym.ThreadedVectorEnv` seed their sub-environments,
@@ -55,9 +76,13 @@ class BatchVectorEnv(VectorEnv):
     reset with that seed. `reset(options=...)` is refused (every reset resets all worlds).
     """
 
-    def __init__(self, env: BatchEnvironment):
-        if not isinstance(env, BatchEnvironment):
-            raise TypeError(f"env: expected a composer.batch.BatchEnvironment, got {env!r}")
+    def __init__(self, env: "BatchEnvironment"):
+        missing = [name for name in BATCH_INTERFACE if not hasattr(env, name)]
+        if missing:
+            raise TypeError(
+                f"env: expected a composer.batch.BatchEnvironment (or an environment with its "
+                f"batch interface), got {env!r}, which lacks {missing}"
+            )
         self.env = env
         self._autoreset = Autoreset.of(env.autoreset_mode)
         self.metadata = {"autoreset_mode": AutoresetMode(self._autoreset.gymnasium_value)}
