@@ -5,7 +5,7 @@
 `suite.load(domain_name, task_name, task_kwargs={"random": seed_i})` (world i's seed by
 the batch's rule, `composer.batch.environment.world_random_states`). The suite's code and
 models come from the installed dm_control at run time, through this project's redirect;
-dm_control is not a dependency of this project (`pip install dm-control --no-deps`).
+dm_control is not a dependency of this project (`pip install dm-control --no-deps scipy`).
 
 The array code lives in `suite_batch.domains`, one module per domain (`BATCHED` lists the
 suite task classes it covers); a task without it raises NotImplementedError naming it.

@@ -17,7 +17,10 @@ from composer import dm_control_compat
 __all__ = ["check_task_name", "import_suite"]
 
 #: How to get the suite when dm_control is missing.
-INSTALL_HINT = "pip install dm-control --no-deps (the suite's code and models come from it)"
+INSTALL_HINT = (
+    "pip install dm-control --no-deps scipy (the suite's code and models come from dm_control; "
+    "--no-deps keeps the installed MuJoCo, and quadruped's terrain needs scipy)"
+)
 
 
 def import_suite() -> ModuleType:

@@ -24,7 +24,7 @@ def _has_suite() -> bool:
 #: Put on a module (`pytestmark = episodes.needs_suite`) whose tests need the suite.
 needs_suite = pytest.mark.skipif(
     not _has_suite(),
-    reason="needs dm_control's suite (pip install dm-control --no-deps); CI runs these in "
+    reason="needs dm_control's suite (pip install dm-control --no-deps scipy); CI runs these in "
     "the conformance harness's venv",
 )
 
