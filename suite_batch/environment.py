@@ -185,6 +185,9 @@ class SuiteBatchEnvironment:
         num_envs axis."""
         return self._env.observation_spec()
 
+    #: What `reset` and `step` hand out: NumPy arrays (as `BatchEnvironment.array_type`).
+    array_type = "numpy"
+
     @property
     def final_observation(self) -> dict[str, np.ndarray]:
         """With autoreset "same_step": the last observation of the episodes that ended at
