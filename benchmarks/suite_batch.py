@@ -32,8 +32,13 @@ Needs dm_control's suite: run from the project's venv, the script re-runs itself
 dm_control conformance harness's venv (dm_control 1.0.50 on the newest MuJoCo, built on
 first use), as the batched suite's tests do.
 
+With `--pixels`, it measures instead frames per second with dm_control's pixel observations
+(84x84, camera 0), for cartpole-swingup and walker-walk (or `--tasks`): a loop of
+`--loop-envs` envs in dm_control's `pixels.Wrapper` beside `suite_batch.pixels.Wrapper` over
+the batch (run it with `--num-envs 64`), and ends with a JSON line of those.
+
 Usage: python benchmarks/suite_batch.py [--tasks cheetah-run,walker-walk] [--num-envs 256]
-    [--threads 2] [--steps 1000] [--episode-steps N] [--repeats 3] [--no-envpool]
+    [--threads 2] [--steps 1000] [--episode-steps N] [--repeats 3] [--no-envpool] [--pixels]
 """
 
 import argparse
@@ -248,9 +253,81 @@ def _ratio(a: float | None, b: float | None) -> str:
     return "-" if a is None or b is None else f"{a / b:.2f}x"
 
 
+#: The pixels table's tasks and rendering (what pixel-based agents render).
+PIXEL_TASKS = ("cartpole-swingup", "walker-walk")
+PIXEL_RENDER = {"height": 84, "width": 84, "camera_id": 0}
+
+
+def _pixel_rates(suite, task: str, args) -> dict[str, float]:
+    """Frames per second (one world's control step and frame each) of a loop of
+    dm_control's pixel-wrapped envs and of the batch's `suite_batch.pixels.Wrapper`."""
+    from dm_control.suite.wrappers import pixels as dm_pixels
+
+    import suite_batch
+    from suite_batch import pixels
+
+    domain, name = _split(task)
+    loop_envs = [
+        dm_pixels.Wrapper(suite.load(domain, name, task_kwargs={"random": i}), True, PIXEL_RENDER)
+        for i in range(args.loop_envs)
+    ]
+    batch = pixels.Wrapper(
+        suite_batch.load(domain, name, args.num_envs, seed=0, threads=args.threads),
+        render_kwargs=PIXEL_RENDER,
+    )
+    actions = _actions(batch.action_spec(), args.steps + 10, args.num_envs)
+    for env in loop_envs:
+        env.reset()
+    start = time.perf_counter()
+    for t in range(args.steps):
+        for env, action in zip(loop_envs, actions[t]):
+            if env.step(action).last():
+                env.reset()
+    loop = args.steps * len(loop_envs) / (time.perf_counter() - start)
+    batch.reset()
+    for t in range(10):
+        batch.step(actions[t])
+    start = time.perf_counter()
+    for t in range(args.steps):
+        batch.step(actions[10 + t])
+    rate = args.steps * args.num_envs / (time.perf_counter() - start)
+    batch.close()
+    return {"loop": loop, "batch": rate}
+
+
+def _pixels_main(args) -> None:
+    from suite_batch import loading
+
+    suite = loading.import_suite()
+    tasks = [task for task in args.tasks.split(",") if task] if args.tasks else PIXEL_TASKS
+    samples = {task: {"loop": [], "batch": []} for task in tasks}
+    for _ in range(args.repeats):
+        for task in tasks:
+            for name, rate in _pixel_rates(suite, task, args).items():
+                samples[task][name].append(rate)
+    medians = {
+        task: {name: statistics.median(values) for name, values in columns.items()}
+        for task, columns in samples.items()
+    }
+    print(
+        f"\ncores: {len(os.sched_getaffinity(0))}, load average (1 min): "
+        f"{os.getloadavg()[0]:.2f}, N={args.num_envs}, threads={args.threads}, "
+        f"{args.steps} control steps timed, frames {PIXEL_RENDER}, medians of "
+        f"{args.repeats}; frames/s\n"
+    )
+    print("| task | loop of pixels.Wrapper envs | batch pixels.Wrapper | batch / loop |")
+    print("|---|---|---|---|")
+    for task, m in medians.items():
+        print(
+            f"| {task} | {_number(m['loop'])} | {_number(m['batch'])} | "
+            f"{_ratio(m['batch'], m['loop'])} |"
+        )
+    print(json.dumps(medians))
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--tasks", default=",".join(TASKS))
+    parser.add_argument("--tasks", default=None)
     parser.add_argument("--num-envs", type=int, default=256)
     parser.add_argument("--threads", type=int, default=2)
     parser.add_argument("--steps", type=int, default=1000)
@@ -258,12 +335,16 @@ def main() -> None:
     parser.add_argument("--loop-envs", type=int, default=4)
     parser.add_argument("--repeats", type=int, default=3)
     parser.add_argument("--no-envpool", action="store_true")
+    parser.add_argument("--pixels", action="store_true")
     args = parser.parse_args()
     _in_suite_venv()
+    if args.pixels:
+        _pixels_main(args)
+        return
     from suite_batch import loading
 
     suite = loading.import_suite()
-    tasks = [task for task in args.tasks.split(",") if task]
+    tasks = [task for task in args.tasks.split(",") if task] if args.tasks else list(TASKS)
     rows = {task: _Rows(suite, task, args) for task in tasks}
     envpool_python = _envpool_python(args)
     samples = {task: {"loop": [], "raw": [], "batch": [], "envpool": []} for task in tasks}
